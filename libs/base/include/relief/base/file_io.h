@@ -1,0 +1,33 @@
+#pragma once
+// File access with the guarantees the store relies on: whole-file reads, and
+// atomic writes (temporary file in the same directory, fsync, rename), so a
+// crash or a full disk never leaves a partial file under the final name.
+#include <cstddef>
+#include <filesystem>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "relief/base/result.h"
+
+namespace relief {
+
+Result<std::vector<std::byte>> read_file(const std::filesystem::path& path);
+Result<std::string> read_text_file(const std::filesystem::path& path);
+
+// Writes `bytes` to `path` atomically, creating parent directories. The rename
+// makes the write atomic against a killed process; `durable` adds an fsync so it
+// also survives a power cut (used for manifests, not for every tile).
+Status write_file_atomic(const std::filesystem::path& path, std::span<const std::byte> bytes,
+                         bool durable = false);
+Status write_text_file_atomic(const std::filesystem::path& path, std::string_view text,
+                              bool durable = true);
+
+// Temporary files left behind by a killed writer end with this marker plus a suffix.
+inline constexpr std::string_view kTempMarker = ".tmp.";
+bool is_temporary_file(const std::filesystem::path& path);
+
+// Human-readable description of errno for messages.
+std::string errno_text(int err);
+
+}  // namespace relief

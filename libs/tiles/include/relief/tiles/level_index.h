@@ -1,0 +1,50 @@
+#pragma once
+// Per-level metadata index: which tiles exist and their value bounds, small
+// enough to fetch before any tile so LOD selection can bound unloaded quads
+// (the role of Comet's tile-corner elevation buffer, seed 000 §3.2.3).
+//
+// Binary layout (little-endian): magic "RELIEFI\0", u16 version, u16 level,
+// u32 x0, y0, columns, rows (bounding box of present tiles), u64 count, the
+// presence bitmap of columns*rows bits (row-major, LSB first), then `count`
+// records {f32 min, f32 max, u32 valid samples, u32 file bytes} in bitmap
+// order, then u32 CRC-32 of everything before it. min/max are rounded outwards.
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "relief/base/result.h"
+#include "relief/geo/tile_key.h"
+
+namespace relief::tiles {
+
+struct IndexEntry {
+  geo::TileKey key;
+  float min = 0, max = 0;
+  uint32_t valid_count = 0;
+  uint32_t file_bytes = 0;
+};
+
+class LevelIndex {
+ public:
+  explicit LevelIndex(int level = 0) : level_(level) {}
+  int level() const { return level_; }
+
+  void add(const IndexEntry& e);  // keys must be unique
+  const IndexEntry* find(const geo::TileKey& key) const;
+  // Entries sorted by (y, x).
+  const std::vector<IndexEntry>& entries() const;
+  size_t size() const { return entries_.size(); }
+  uint64_t total_bytes() const;
+
+  std::vector<std::byte> serialize() const;
+  static Result<LevelIndex> parse(std::span<const std::byte> bytes, const std::string& name);
+
+ private:
+  void sort() const;
+  int level_;
+  mutable std::vector<IndexEntry> entries_;
+  mutable bool sorted_ = true;
+};
+
+}  // namespace relief::tiles

@@ -1,0 +1,46 @@
+#pragma once
+// manifest.json: the global description of one dataset (see docs/store-format.md).
+#include <string>
+#include <vector>
+
+#include "relief/base/result.h"
+#include "relief/geo/tile_key.h"
+#include "relief/tiles/codec.h"
+#include "relief/tiles/raster.h"
+
+namespace relief::tiles {
+
+inline constexpr int kStoreFormatVersion = 1;
+
+enum class DatasetKind { Elevation, Imagery, Sar };
+std::string_view to_string(DatasetKind k);
+Result<DatasetKind> dataset_kind_from_string(std::string_view s);
+
+struct SourceInfo {
+  std::string path;
+  std::string crs;  // authority code when known ("EPSG:32618"), else WKT
+  int width = 0, height = 0, bands = 0;
+  std::string data_type;  // as GDAL names it
+};
+
+struct Manifest {
+  int format_version = kStoreFormatVersion;
+  DatasetKind kind = DatasetKind::Elevation;
+  SampleType sample_type = SampleType::Float32;
+  int bands = 1;
+  std::string units;  // "m" for elevation, "amplitude" for SAR, "" for imagery
+  int tile_log2_height = 8;
+  int border = 9;
+  int min_level = 0, max_level = 0;
+  geo::GeoBox extent;  // of the source data, degrees
+  SampleStats stats;   // over all valid samples of the finest level
+  CodecOptions codec;
+  std::vector<SourceInfo> sources;
+  std::string created_by;
+
+  std::string nodata_description() const;
+  std::string to_json() const;
+  static Result<Manifest> from_json(const std::string& text, const std::string& name);
+};
+
+}  // namespace relief::tiles

@@ -1,0 +1,46 @@
+#pragma once
+// Read access to a store directory on the local file system. Writers use the
+// free functions below; every write is atomic.
+#include <filesystem>
+#include <optional>
+#include <vector>
+
+#include "relief/base/result.h"
+#include "relief/geo/tile_grid.h"
+#include "relief/tiles/level_index.h"
+#include "relief/tiles/manifest.h"
+#include "relief/tiles/tile_file.h"
+
+namespace relief::tiles {
+
+class Store {
+ public:
+  // Reads the manifest and every level index.
+  static Result<Store> open(const std::filesystem::path& root);
+
+  const std::filesystem::path& root() const { return root_; }
+  const Manifest& manifest() const { return manifest_; }
+  const geo::TileGrid& grid() const { return grid_; }
+  const LevelIndex& index(int level) const;  // empty index outside the level range
+
+  std::filesystem::path tile_path(const geo::TileKey& key) const;
+  bool has_tile(const geo::TileKey& key) const { return index(key.level).find(key) != nullptr; }
+  // Reads and checks one tile; a tile absent from the index is an error too.
+  Result<Tile> read_tile(const geo::TileKey& key) const;
+  // Nearest-sample value at (lon, lat) on `level`; nullopt where there is no
+  // data (no tile, or a nodata sample). Float32 stores only.
+  Result<std::optional<float>> sample(double lon, double lat, int level) const;
+
+ private:
+  std::filesystem::path root_;
+  Manifest manifest_;
+  geo::TileGrid grid_;
+  std::vector<LevelIndex> indices_;
+};
+
+Status write_tile_file(const std::filesystem::path& root, const geo::TileKey& key,
+                       std::span<const std::byte> bytes);
+Status write_level_index(const std::filesystem::path& root, const LevelIndex& index);
+Status write_manifest(const std::filesystem::path& root, const Manifest& manifest);
+
+}  // namespace relief::tiles

@@ -1,0 +1,139 @@
+// Image codecs for UInt8 RGBA imagery tiles: PNG (lossless), JPEG (lossy RGB
+// plus a zstd-compressed alpha plane, since JPEG has no alpha), WebP (lossy
+// colour, lossless alpha).
+#include <png.h>
+#include <turbojpeg.h>
+#include <webp/decode.h>
+#include <webp/encode.h>
+#include <zstd.h>
+
+#include <cstring>
+#include <memory>
+
+#include <fmt/format.h>
+
+#include "relief/tiles/codec.h"
+
+namespace relief::tiles::detail {
+
+Result<std::vector<std::byte>> encode_png(const Raster& r) {
+  png_image image{};
+  image.version = PNG_IMAGE_VERSION;
+  image.width = static_cast<png_uint_32>(r.width());
+  image.height = static_cast<png_uint_32>(r.height());
+  image.format = PNG_FORMAT_RGBA;
+  png_alloc_size_t size = 0;
+  if (!png_image_write_to_memory(&image, nullptr, &size, 0, r.u8().data(), 0, nullptr)) {
+    return fail(fmt::format("png: {}", image.message));
+  }
+  std::vector<std::byte> out(size);
+  if (!png_image_write_to_memory(&image, out.data(), &size, 0, r.u8().data(), 0, nullptr)) {
+    return fail(fmt::format("png: {}", image.message));
+  }
+  out.resize(size);
+  return out;
+}
+
+Result<Raster> decode_png(std::span<const std::byte> p, int w, int h) {
+  png_image image{};
+  image.version = PNG_IMAGE_VERSION;
+  if (!png_image_begin_read_from_memory(&image, p.data(), p.size())) {
+    return fail(fmt::format("png payload is corrupt: {}", image.message));
+  }
+  if (static_cast<int>(image.width) != w || static_cast<int>(image.height) != h) {
+    png_image_free(&image);
+    return fail("png payload does not match the tile header");
+  }
+  image.format = PNG_FORMAT_RGBA;
+  Raster r(SampleType::UInt8, 4, w, h);
+  if (!png_image_finish_read(&image, nullptr, r.u8().data(), 0, nullptr)) {
+    return fail(fmt::format("png payload is corrupt: {}", image.message));
+  }
+  return r;
+}
+
+namespace {
+struct TjDeleter {
+  void operator()(void* h) const { tjDestroy(h); }
+};
+using TjHandle = std::unique_ptr<void, TjDeleter>;
+
+void append_u32(std::vector<std::byte>& out, uint32_t v) {
+  for (int i = 0; i < 4; ++i) out.push_back(static_cast<std::byte>((v >> (8 * i)) & 0xFF));
+}
+}  // namespace
+
+// Layout: u32 jpeg size, JPEG bytes (RGB), zstd frame of the alpha plane.
+Result<std::vector<std::byte>> encode_jpeg(const Raster& r, int quality) {
+  TjHandle tj(tjInitCompress());
+  if (!tj) return fail("jpeg: cannot initialise the encoder");
+  unsigned char* jpeg = nullptr;
+  unsigned long jpeg_size = 0;
+  if (tjCompress2(tj.get(), r.u8().data(), r.width(), 0, r.height(), TJPF_RGBA, &jpeg, &jpeg_size,
+                  TJSAMP_420, quality, TJFLAG_ACCURATEDCT) != 0) {
+    return fail(fmt::format("jpeg: {}", tjGetErrorStr2(tj.get())));
+  }
+  std::vector<std::byte> out;
+  append_u32(out, static_cast<uint32_t>(jpeg_size));
+  out.insert(out.end(), reinterpret_cast<std::byte*>(jpeg),
+             reinterpret_cast<std::byte*>(jpeg) + jpeg_size);
+  tjFree(jpeg);
+  std::vector<uint8_t> alpha(r.pixel_count());
+  for (size_t i = 0; i < alpha.size(); ++i) alpha[i] = r.u8()[i * 4 + 3];
+  std::vector<std::byte> z(ZSTD_compressBound(alpha.size()));
+  const size_t n = ZSTD_compress(z.data(), z.size(), alpha.data(), alpha.size(), 3);
+  if (ZSTD_isError(n)) return fail("jpeg: cannot compress the alpha plane");
+  out.insert(out.end(), z.begin(), z.begin() + static_cast<ptrdiff_t>(n));
+  return out;
+}
+
+Result<Raster> decode_jpeg(std::span<const std::byte> p, int w, int h) {
+  if (p.size() < 4) return fail("jpeg payload is truncated");
+  uint32_t jpeg_size = 0;
+  for (int i = 0; i < 4; ++i) jpeg_size |= static_cast<uint32_t>(p[static_cast<size_t>(i)]) << (8 * i);
+  if (jpeg_size > p.size() - 4) return fail("jpeg payload is truncated");
+  TjHandle tj(tjInitDecompress());
+  if (!tj) return fail("jpeg: cannot initialise the decoder");
+  auto* jpeg = reinterpret_cast<const unsigned char*>(p.data() + 4);
+  int jw = 0, jh = 0, subsamp = 0, colorspace = 0;
+  if (tjDecompressHeader3(tj.get(), jpeg, jpeg_size, &jw, &jh, &subsamp, &colorspace) != 0 ||
+      jw != w || jh != h) {
+    return fail("jpeg payload is corrupt or does not match the tile header");
+  }
+  Raster r(SampleType::UInt8, 4, w, h);
+  if (tjDecompress2(tj.get(), jpeg, jpeg_size, r.u8().data(), w, 0, h, TJPF_RGBA, 0) != 0) {
+    return fail(fmt::format("jpeg payload is corrupt: {}", tjGetErrorStr2(tj.get())));
+  }
+  std::vector<uint8_t> alpha(r.pixel_count());
+  auto z = p.subspan(4 + jpeg_size);
+  const size_t n = ZSTD_decompress(alpha.data(), alpha.size(), z.data(), z.size());
+  if (ZSTD_isError(n) || n != alpha.size()) return fail("jpeg payload has a corrupt alpha plane");
+  for (size_t i = 0; i < alpha.size(); ++i) r.u8()[i * 4 + 3] = alpha[i];
+  return r;
+}
+
+Result<std::vector<std::byte>> encode_webp(const Raster& r, int quality) {
+  uint8_t* output = nullptr;
+  const size_t size = WebPEncodeRGBA(r.u8().data(), r.width(), r.height(), r.width() * 4,
+                                     static_cast<float>(quality), &output);
+  if (size == 0) return fail("webp: encoding failed");
+  std::vector<std::byte> out(reinterpret_cast<std::byte*>(output),
+                             reinterpret_cast<std::byte*>(output) + size);
+  WebPFree(output);
+  return out;
+}
+
+Result<Raster> decode_webp(std::span<const std::byte> p, int w, int h) {
+  auto* data = reinterpret_cast<const uint8_t*>(p.data());
+  int ww = 0, hh = 0;
+  if (!WebPGetInfo(data, p.size(), &ww, &hh) || ww != w || hh != h) {
+    return fail("webp payload is corrupt or does not match the tile header");
+  }
+  Raster r(SampleType::UInt8, 4, w, h);
+  if (!WebPDecodeRGBAInto(data, p.size(), r.u8().data(), r.byte_size(), w * 4)) {
+    return fail("webp payload is corrupt");
+  }
+  return r;
+}
+
+}  // namespace relief::tiles::detail

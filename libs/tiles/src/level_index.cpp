@@ -1,0 +1,152 @@
+#include "relief/tiles/level_index.h"
+
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+#include <fmt/format.h>
+
+#include "relief/tiles/tile_file.h"
+
+namespace relief::tiles {
+namespace {
+
+constexpr char kMagic[8] = {'R', 'E', 'L', 'I', 'E', 'F', 'I', '\0'};
+constexpr uint16_t kVersion = 1;
+constexpr size_t kFixedHeader = 8 + 2 + 2 + 4 * 4 + 8;
+constexpr size_t kRecordSize = 16;
+
+bool by_row(const IndexEntry& a, const IndexEntry& b) {
+  return std::tie(a.key.y, a.key.x) < std::tie(b.key.y, b.key.x);
+}
+
+template <class T>
+void append(std::vector<std::byte>& out, T v) {
+  const auto* p = reinterpret_cast<const std::byte*>(&v);
+  out.insert(out.end(), p, p + sizeof v);
+}
+template <class T>
+T read_at(std::span<const std::byte> b, size_t at) {
+  T v;
+  std::memcpy(&v, b.data() + at, sizeof v);
+  return v;
+}
+
+}  // namespace
+
+void LevelIndex::add(const IndexEntry& e) {
+  assert(e.key.level == level_);
+  entries_.push_back(e);
+  sorted_ = false;
+}
+
+void LevelIndex::sort() const {
+  if (!sorted_) {
+    std::sort(entries_.begin(), entries_.end(), by_row);
+    sorted_ = true;
+  }
+}
+
+const std::vector<IndexEntry>& LevelIndex::entries() const {
+  sort();
+  return entries_;
+}
+
+const IndexEntry* LevelIndex::find(const geo::TileKey& key) const {
+  sort();
+  IndexEntry probe{key};
+  auto it = std::lower_bound(entries_.begin(), entries_.end(), probe, by_row);
+  if (it == entries_.end() || it->key != key) return nullptr;
+  return &*it;
+}
+
+uint64_t LevelIndex::total_bytes() const {
+  uint64_t sum = 0;
+  for (const auto& e : entries_) sum += e.file_bytes;
+  return sum;
+}
+
+std::vector<std::byte> LevelIndex::serialize() const {
+  sort();
+  uint32_t x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+  if (!entries_.empty()) {
+    x0 = y0 = std::numeric_limits<uint32_t>::max();
+    for (const auto& e : entries_) {
+      x0 = std::min(x0, e.key.x);
+      y0 = std::min(y0, e.key.y);
+      x1 = std::max(x1, e.key.x + 1);
+      y1 = std::max(y1, e.key.y + 1);
+    }
+  }
+  const uint32_t cols = x1 - x0, rows = y1 - y0;
+  std::vector<std::byte> out;
+  out.insert(out.end(), reinterpret_cast<const std::byte*>(kMagic),
+             reinterpret_cast<const std::byte*>(kMagic) + 8);
+  append<uint16_t>(out, kVersion);
+  append<uint16_t>(out, static_cast<uint16_t>(level_));
+  append<uint32_t>(out, x0);
+  append<uint32_t>(out, y0);
+  append<uint32_t>(out, cols);
+  append<uint32_t>(out, rows);
+  append<uint64_t>(out, entries_.size());
+  std::vector<std::byte> bitmap((static_cast<uint64_t>(cols) * rows + 7) / 8);
+  for (const auto& e : entries_) {
+    const uint64_t bit = static_cast<uint64_t>(e.key.y - y0) * cols + (e.key.x - x0);
+    bitmap[bit / 8] |= static_cast<std::byte>(1u << (bit % 8));
+  }
+  out.insert(out.end(), bitmap.begin(), bitmap.end());
+  // Entries sorted by (y, x) are exactly bitmap order.
+  for (const auto& e : entries_) {
+    append<float>(out, std::nextafter(e.min, -std::numeric_limits<float>::infinity()));
+    append<float>(out, std::nextafter(e.max, std::numeric_limits<float>::infinity()));
+    append<uint32_t>(out, e.valid_count);
+    append<uint32_t>(out, e.file_bytes);
+  }
+  append<uint32_t>(out, crc32_of(out));
+  return out;
+}
+
+Result<LevelIndex> LevelIndex::parse(std::span<const std::byte> b, const std::string& name) {
+  if (b.size() < kFixedHeader + 4 || std::memcmp(b.data(), kMagic, 8) != 0) {
+    return fail(fmt::format("{}: not a relief level index", name));
+  }
+  if (read_at<uint32_t>(b, b.size() - 4) != crc32_of(b.first(b.size() - 4))) {
+    return fail(fmt::format("{}: level index checksum mismatch", name));
+  }
+  if (read_at<uint16_t>(b, 8) != kVersion) {
+    return fail(fmt::format("{}: unsupported level index version", name));
+  }
+  const int level = read_at<uint16_t>(b, 10);
+  const auto x0 = read_at<uint32_t>(b, 12), y0 = read_at<uint32_t>(b, 16);
+  const auto cols = read_at<uint32_t>(b, 20), rows = read_at<uint32_t>(b, 24);
+  const auto count = read_at<uint64_t>(b, 28);
+  const uint64_t bitmap_bytes = (static_cast<uint64_t>(cols) * rows + 7) / 8;
+  if (level > geo::kMaxLevel || kFixedHeader + bitmap_bytes + count * kRecordSize + 4 != b.size()) {
+    return fail(fmt::format("{}: level index is truncated or inconsistent", name));
+  }
+  LevelIndex index(level);
+  size_t record = kFixedHeader + bitmap_bytes;
+  for (uint64_t bit = 0; bit < static_cast<uint64_t>(cols) * rows; ++bit) {
+    if (!(static_cast<unsigned>(b[kFixedHeader + bit / 8]) & (1u << (bit % 8)))) continue;
+    if (record + kRecordSize > b.size() - 4) {
+      return fail(fmt::format("{}: level index bitmap and records disagree", name));
+    }
+    IndexEntry e;
+    e.key = {level, x0 + static_cast<uint32_t>(bit % cols), y0 + static_cast<uint32_t>(bit / cols)};
+    if (!e.key.valid()) return fail(fmt::format("{}: level index names a tile outside the level", name));
+    e.min = read_at<float>(b, record);
+    e.max = read_at<float>(b, record + 4);
+    e.valid_count = read_at<uint32_t>(b, record + 8);
+    e.file_bytes = read_at<uint32_t>(b, record + 12);
+    index.entries_.push_back(e);
+    record += kRecordSize;
+  }
+  if (index.entries_.size() != count) {
+    return fail(fmt::format("{}: level index bitmap and records disagree", name));
+  }
+  return index;
+}
+
+}  // namespace relief::tiles

@@ -1,0 +1,115 @@
+#include "relief/tiles/manifest.h"
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+namespace relief::tiles {
+
+using nlohmann::json;
+
+std::string_view to_string(DatasetKind k) {
+  switch (k) {
+    case DatasetKind::Elevation: return "elevation";
+    case DatasetKind::Imagery: return "imagery";
+    case DatasetKind::Sar: return "sar";
+  }
+  return "?";
+}
+
+Result<DatasetKind> dataset_kind_from_string(std::string_view s) {
+  for (auto k : {DatasetKind::Elevation, DatasetKind::Imagery, DatasetKind::Sar}) {
+    if (s == to_string(k)) return k;
+  }
+  return fail(fmt::format("unknown dataset kind '{}' (elevation, imagery, sar)", s));
+}
+
+std::string Manifest::nodata_description() const {
+  return sample_type == SampleType::Float32 ? "NaN" : "alpha=0";
+}
+
+std::string Manifest::to_json() const {
+  json j;
+  j["format"] = "relief-store";
+  j["format_version"] = format_version;
+  j["kind"] = to_string(kind);
+  j["sample_type"] = to_string(sample_type);
+  j["bands"] = bands;
+  j["units"] = units;
+  j["nodata"] = nodata_description();
+  j["tile"] = {{"width", 2 << tile_log2_height},
+               {"height", 1 << tile_log2_height},
+               {"border", border},
+               {"registration", "cell-centre"}};
+  j["levels"] = {{"min", min_level}, {"max", max_level}};
+  j["extent"] = {{"west", extent.west}, {"south", extent.south}, {"east", extent.east},
+                 {"north", extent.north}};
+  j["statistics"] = {{"min", stats.min}, {"max", stats.max}, {"mean", stats.mean},
+                     {"std", stats.stddev}, {"valid_samples", stats.valid_count}};
+  j["codec"] = {{"name", to_string(codec.codec)}, {"max_error", codec.max_error},
+                {"quality", codec.quality}};
+  json sources_json = json::array();
+  for (const auto& s : sources) {
+    sources_json.push_back({{"path", s.path}, {"crs", s.crs}, {"width", s.width},
+                            {"height", s.height}, {"bands", s.bands}, {"data_type", s.data_type}});
+  }
+  j["sources"] = sources_json;
+  j["created_by"] = created_by;
+  return j.dump(2) + "\n";
+}
+
+Result<Manifest> Manifest::from_json(const std::string& text, const std::string& name) {
+  try {
+    const json j = json::parse(text);
+    if (j.at("format").get<std::string>() != "relief-store") {
+      return fail(fmt::format("{}: not a relief store manifest", name));
+    }
+    Manifest m;
+    m.format_version = j.at("format_version").get<int>();
+    if (m.format_version != kStoreFormatVersion) {
+      return fail(fmt::format("{}: unsupported store format version {}", name, m.format_version));
+    }
+    auto kind = dataset_kind_from_string(j.at("kind").get<std::string>());
+    if (!kind) return fail(fmt::format("{}: {}", name, kind.error().message));
+    m.kind = *kind;
+    auto type = sample_type_from_string(j.at("sample_type").get<std::string>());
+    if (!type) return fail(fmt::format("{}: {}", name, type.error().message));
+    m.sample_type = *type;
+    m.bands = j.at("bands").get<int>();
+    m.units = j.at("units").get<std::string>();
+    const int height = j.at("tile").at("height").get<int>();
+    int log2 = 0;
+    while ((1 << log2) < height) ++log2;
+    if ((1 << log2) != height || j.at("tile").at("width").get<int>() != 2 * height) {
+      return fail(fmt::format("{}: tile size must be 2^(k+1) x 2^k", name));
+    }
+    m.tile_log2_height = log2;
+    m.border = j.at("tile").at("border").get<int>();
+    m.min_level = j.at("levels").at("min").get<int>();
+    m.max_level = j.at("levels").at("max").get<int>();
+    if (m.min_level < 0 || m.max_level > geo::kMaxLevel || m.min_level > m.max_level) {
+      return fail(fmt::format("{}: bad level range", name));
+    }
+    const auto& e = j.at("extent");
+    m.extent = {e.at("west").get<double>(), e.at("south").get<double>(),
+                e.at("east").get<double>(), e.at("north").get<double>()};
+    const auto& s = j.at("statistics");
+    m.stats = {s.at("min").get<double>(), s.at("max").get<double>(), s.at("mean").get<double>(),
+               s.at("std").get<double>(), s.at("valid_samples").get<uint64_t>()};
+    auto codec = codec_from_string(j.at("codec").at("name").get<std::string>());
+    if (!codec) return fail(fmt::format("{}: {}", name, codec.error().message));
+    m.codec.codec = *codec;
+    m.codec.max_error = j.at("codec").at("max_error").get<double>();
+    m.codec.quality = j.at("codec").value("quality", 90);
+    for (const auto& src : j.at("sources")) {
+      m.sources.push_back({src.at("path").get<std::string>(), src.at("crs").get<std::string>(),
+                           src.at("width").get<int>(), src.at("height").get<int>(),
+                           src.at("bands").get<int>(), src.at("data_type").get<std::string>()});
+    }
+    m.created_by = j.value("created_by", "");
+    return m;
+  } catch (const json::exception& ex) {
+    return fail(fmt::format("{}: invalid manifest: {}", name, ex.what()));
+  }
+}
+
+}  // namespace relief::tiles

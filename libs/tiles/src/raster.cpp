@@ -1,0 +1,113 @@
+#include "relief/tiles/raster.h"
+
+#include <cassert>
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+#include <fmt/format.h>
+
+namespace relief::tiles {
+
+std::string_view to_string(SampleType t) {
+  switch (t) {
+    case SampleType::Float32: return "float32";
+    case SampleType::UInt8: return "uint8";
+  }
+  return "?";
+}
+
+Result<SampleType> sample_type_from_string(std::string_view s) {
+  if (s == "float32") return SampleType::Float32;
+  if (s == "uint8") return SampleType::UInt8;
+  return fail(fmt::format("unknown sample type '{}'", s));
+}
+
+size_t sample_size(SampleType t) { return t == SampleType::Float32 ? 4 : 1; }
+
+Raster::Raster(SampleType type, int bands, int width, int height)
+    : type_(type), bands_(bands), width_(width), height_(height) {
+  assert(width >= 0 && height >= 0 && bands > 0);
+  bytes_.resize(pixel_count() * static_cast<size_t>(bands) * sample_size(type));
+}
+
+Raster Raster::empty(SampleType type, int width, int height) {
+  if (type == SampleType::Float32) {
+    Raster r(type, 1, width, height);
+    auto v = r.f32();
+    std::fill(v.begin(), v.end(), std::numeric_limits<float>::quiet_NaN());
+    return r;
+  }
+  return Raster(type, 4, width, height);  // zero-initialised: transparent
+}
+
+std::span<float> Raster::f32() {
+  assert(type_ == SampleType::Float32);
+  return {reinterpret_cast<float*>(bytes_.data()), bytes_.size() / 4};
+}
+std::span<const float> Raster::f32() const {
+  assert(type_ == SampleType::Float32);
+  return {reinterpret_cast<const float*>(bytes_.data()), bytes_.size() / 4};
+}
+std::span<uint8_t> Raster::u8() {
+  assert(type_ == SampleType::UInt8);
+  return {reinterpret_cast<uint8_t*>(bytes_.data()), bytes_.size()};
+}
+std::span<const uint8_t> Raster::u8() const {
+  assert(type_ == SampleType::UInt8);
+  return {reinterpret_cast<const uint8_t*>(bytes_.data()), bytes_.size()};
+}
+
+bool Raster::valid(int i, int j) const {
+  const size_t p = static_cast<size_t>(j) * static_cast<size_t>(width_) + static_cast<size_t>(i);
+  if (type_ == SampleType::Float32) return !std::isnan(f32()[p]);
+  return u8()[p * 4 + 3] != 0;
+}
+
+SampleStats Raster::stats(int x0, int y0, int w, int h) const {
+  SampleStats s;
+  double sum = 0, sum_sq = 0;
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  uint64_t n = 0;
+  auto add = [&](double v) {
+    sum += v;
+    sum_sq += v * v;
+    lo = std::min(lo, v);
+    hi = std::max(hi, v);
+    ++n;
+  };
+  for (int j = y0; j < y0 + h; ++j) {
+    for (int i = x0; i < x0 + w; ++i) {
+      if (!valid(i, j)) continue;
+      const size_t p = static_cast<size_t>(j) * static_cast<size_t>(width_) + static_cast<size_t>(i);
+      if (type_ == SampleType::Float32) {
+        add(f32()[p]);
+      } else {
+        for (int b = 0; b < 3; ++b) add(u8()[p * 4 + static_cast<size_t>(b)]);
+      }
+      if (type_ == SampleType::UInt8) ++s.valid_count;
+    }
+  }
+  if (type_ == SampleType::Float32) s.valid_count = n;
+  if (n == 0) return s;
+  s.min = lo;
+  s.max = hi;
+  s.mean = sum / static_cast<double>(n);
+  s.stddev = std::sqrt(std::max(0.0, sum_sq / static_cast<double>(n) - s.mean * s.mean));
+  return s;
+}
+
+void Raster::copy_from(const Raster& src, int sx, int sy, int dx, int dy, int w, int h) {
+  assert(src.type_ == type_ && src.bands_ == bands_);
+  assert(sx >= 0 && sy >= 0 && sx + w <= src.width_ && sy + h <= src.height_);
+  assert(dx >= 0 && dy >= 0 && dx + w <= width_ && dy + h <= height_);
+  const size_t px = static_cast<size_t>(bands_) * sample_size(type_);
+  for (int r = 0; r < h; ++r) {
+    const std::byte* from =
+        src.bytes_.data() + (static_cast<size_t>(sy + r) * src.width_ + sx) * px;
+    std::byte* to = bytes_.data() + (static_cast<size_t>(dy + r) * width_ + dx) * px;
+    std::memcpy(to, from, static_cast<size_t>(w) * px);
+  }
+}
+
+}  // namespace relief::tiles

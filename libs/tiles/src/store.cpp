@@ -1,0 +1,106 @@
+#include "relief/tiles/store.h"
+
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "relief/base/file_io.h"
+#include "relief/tiles/store_layout.h"
+
+namespace relief::tiles {
+namespace fs = std::filesystem;
+
+Result<Store> Store::open(const fs::path& root) {
+  const fs::path manifest_path = root / kManifestName;
+  std::error_code ec;
+  if (!fs::is_directory(root, ec)) {
+    return fail(fmt::format("{}: no such store directory", root.string()));
+  }
+  if (!fs::exists(manifest_path, ec)) {
+    return fail(fmt::format("{}: not a relief store (no {}; an interrupted build?)", root.string(),
+                            kManifestName));
+  }
+  auto text = read_text_file(manifest_path);
+  if (!text) return std::unexpected(text.error());
+  auto manifest = Manifest::from_json(*text, manifest_path.string());
+  if (!manifest) return std::unexpected(manifest.error());
+  auto grid = geo::TileGrid::create(manifest->tile_log2_height, manifest->border);
+  if (!grid) return fail(fmt::format("{}: {}", manifest_path.string(), grid.error().message));
+
+  Store store;
+  store.root_ = root;
+  store.manifest_ = std::move(*manifest);
+  store.grid_ = *grid;
+  for (int level = 0; level <= store.manifest_.max_level; ++level) {
+    if (level < store.manifest_.min_level) {
+      store.indices_.emplace_back(level);
+      continue;
+    }
+    const fs::path path = root / level_index_relative_path(level);
+    auto bytes = read_file(path);
+    if (!bytes) return std::unexpected(bytes.error());
+    auto index = LevelIndex::parse(*bytes, path.string());
+    if (!index) return std::unexpected(index.error());
+    if (index->level() != level) return fail(fmt::format("{}: index is for level {}", path.string(), index->level()));
+    store.indices_.push_back(std::move(*index));
+  }
+  return store;
+}
+
+const LevelIndex& Store::index(int level) const {
+  static const LevelIndex kEmpty;
+  if (level < 0 || level >= static_cast<int>(indices_.size())) return kEmpty;
+  return indices_[static_cast<size_t>(level)];
+}
+
+fs::path Store::tile_path(const geo::TileKey& key) const {
+  return root_ / tile_relative_path(key);
+}
+
+Result<Tile> Store::read_tile(const geo::TileKey& key) const {
+  const fs::path path = tile_path(key);
+  if (!has_tile(key)) {
+    return fail(fmt::format("{}: tile {} is not in the store", path.string(), key.to_string()));
+  }
+  auto bytes = read_file(path);
+  if (!bytes) return std::unexpected(bytes.error());
+  auto tile = decode_tile(*bytes, path.string());
+  if (!tile) return tile;
+  const auto& h = tile->header;
+  if (h.type != manifest_.sample_type || h.interior_width() != grid_.width() ||
+      h.interior_height() != grid_.height() || h.border != grid_.border()) {
+    return fail(fmt::format("{}: tile shape or type disagrees with the manifest", path.string()));
+  }
+  return tile;
+}
+
+Result<std::optional<float>> Store::sample(double lon, double lat, int level) const {
+  if (manifest_.sample_type != SampleType::Float32) {
+    return fail(fmt::format("{}: sampling needs a float32 store", root_.string()));
+  }
+  const geo::SampleIndex s = grid_.locate(level, lon, lat);
+  if (!has_tile(s.tile)) return std::optional<float>();
+  auto tile = read_tile(s.tile);
+  if (!tile) return std::unexpected(tile.error());
+  const int w = tile->raster.width();
+  const float v = tile->raster.f32()[static_cast<size_t>(s.j + grid_.border()) * static_cast<size_t>(w) +
+                                     static_cast<size_t>(s.i + grid_.border())];
+  if (std::isnan(v)) return std::optional<float>();
+  return std::optional<float>(v);
+}
+
+Status write_tile_file(const fs::path& root, const geo::TileKey& key,
+                       std::span<const std::byte> bytes) {
+  return write_file_atomic(root / tile_relative_path(key), bytes);
+}
+
+Status write_level_index(const fs::path& root, const LevelIndex& index) {
+  const auto bytes = index.serialize();
+  return write_file_atomic(root / level_index_relative_path(index.level()), bytes, true);
+}
+
+Status write_manifest(const fs::path& root, const Manifest& manifest) {
+  return write_text_file_atomic(root / kManifestName, manifest.to_json(), true);
+}
+
+}  // namespace relief::tiles

@@ -1,0 +1,18 @@
+#!/usr/bin/env bash
+# Installs every build, test and benchmark dependency from Debian packages.
+set -euo pipefail
+packages=(
+  build-essential cmake ninja-build ccache pkg-config git zip
+  libgdal-dev gdal-bin
+  libzstd-dev liblerc-dev libpng-dev libturbojpeg0-dev libwebp-dev
+  nlohmann-json3-dev libfmt-dev libgtest-dev
+)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]})); then
+  SUDO=""; [[ $(id -u) -ne 0 ]] && SUDO="sudo"
+  $SUDO apt-get update -q
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -q --no-install-recommends "${missing[@]}"
+fi
