@@ -1,0 +1,74 @@
+#include "args.h"
+
+#include <charconv>
+#include <cmath>
+
+#include <fmt/format.h>
+
+namespace relief::cli {
+
+Result<Args> Args::parse(const std::vector<std::string>& argv, const std::vector<OptionSpec>& specs,
+                         const std::string& command) {
+  Args args;
+  for (size_t i = 0; i < argv.size(); ++i) {
+    std::string arg = argv[i];
+    if (arg.size() < 2 || arg[0] != '-' || arg == "--") {
+      args.positional_.push_back(arg);
+      continue;
+    }
+    std::optional<std::string> inline_value;
+    if (auto eq = arg.find('='); eq != std::string::npos && arg.starts_with("--")) {
+      inline_value = arg.substr(eq + 1);
+      arg = arg.substr(0, eq);
+    }
+    const OptionSpec* spec = nullptr;
+    for (const auto& s : specs) {
+      if (arg == s.name || (!s.alias.empty() && arg == s.alias)) spec = &s;
+    }
+    if (!spec) return fail(fmt::format("{}: unknown option '{}' (see relief {} --help)", command, arg, command));
+    if (!spec->takes_value) {
+      if (inline_value) return fail(fmt::format("{}: option {} takes no value", command, spec->name));
+      args.values_[spec->name] = "";
+      continue;
+    }
+    if (inline_value) {
+      args.values_[spec->name] = *inline_value;
+    } else if (i + 1 < argv.size()) {
+      args.values_[spec->name] = argv[++i];
+    } else {
+      return fail(fmt::format("{}: option {} needs a value", command, spec->name));
+    }
+  }
+  return args;
+}
+
+std::optional<std::string> Args::get(const std::string& name) const {
+  auto it = values_.find(name);
+  if (it == values_.end()) return std::nullopt;
+  return it->second;
+}
+
+Result<std::optional<int>> Args::get_int(const std::string& name, int lo, int hi) const {
+  auto v = get(name);
+  if (!v) return std::optional<int>();
+  int value = 0;
+  auto [p, ec] = std::from_chars(v->data(), v->data() + v->size(), value);
+  if (ec != std::errc() || p != v->data() + v->size()) {
+    return fail(fmt::format("{}: '{}' is not an integer", name, *v));
+  }
+  if (value < lo || value > hi) return fail(fmt::format("{}: {} is not in {}..{}", name, value, lo, hi));
+  return std::optional<int>(value);
+}
+
+Result<std::optional<double>> Args::get_double(const std::string& name) const {
+  auto v = get(name);
+  if (!v) return std::optional<double>();
+  double value = 0;
+  auto [p, ec] = std::from_chars(v->data(), v->data() + v->size(), value);
+  if (ec != std::errc() || p != v->data() + v->size() || !std::isfinite(value)) {
+    return fail(fmt::format("{}: '{}' is not a number", name, *v));
+  }
+  return std::optional<double>(value);
+}
+
+}  // namespace relief::cli

@@ -1,0 +1,38 @@
+#pragma once
+// A small command-line parser: each command declares its options; anything
+// else is a one-line error naming the argument.
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "relief/base/result.h"
+
+namespace relief::cli {
+
+struct OptionSpec {
+  OptionSpec(std::string n, std::string a = "", bool value = true)
+      : name(std::move(n)), alias(std::move(a)), takes_value(value) {}
+  std::string name;   // "--output"
+  std::string alias;  // "-o" or ""
+  bool takes_value;
+};
+
+class Args {
+ public:
+  static Result<Args> parse(const std::vector<std::string>& argv, const std::vector<OptionSpec>& specs,
+                            const std::string& command);
+
+  const std::vector<std::string>& positional() const { return positional_; }
+  bool has(const std::string& name) const { return values_.count(name) > 0; }
+  std::optional<std::string> get(const std::string& name) const;
+
+  Result<std::optional<int>> get_int(const std::string& name, int lo, int hi) const;
+  Result<std::optional<double>> get_double(const std::string& name) const;
+
+ private:
+  std::map<std::string, std::string> values_;
+  std::vector<std::string> positional_;
+};
+
+}  // namespace relief::cli

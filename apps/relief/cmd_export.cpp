@@ -1,0 +1,63 @@
+#include <cstdio>
+#include <sstream>
+
+#include <fmt/format.h>
+
+#include "args.h"
+#include "commands.h"
+#include "relief/ingest/export.h"
+
+namespace relief::cli {
+
+namespace {
+constexpr const char* kHelp = R"(usage: relief export STORE --level L [--bbox W,S,E,N] -o OUT.tif
+
+Reassembles tile interiors of one level into a GeoTIFF (EPSG:4326, the store's
+sample grid; NaN or alpha marks nodata). The box is snapped outwards to samples.
+)";
+
+Result<geo::GeoBox> parse_bbox(const std::string& text) {
+  double v[4];
+  std::istringstream in(text);
+  char comma = 0;
+  for (int i = 0; i < 4; ++i) {
+    if (!(in >> v[i]) || (i < 3 && (!(in >> comma) || comma != ','))) {
+      return fail(fmt::format("--bbox: '{}' is not W,S,E,N", text));
+    }
+  }
+  if (in >> comma) return fail(fmt::format("--bbox: '{}' is not W,S,E,N", text));
+  return geo::GeoBox{v[0], v[1], v[2], v[3]};
+}
+}  // namespace
+
+int run_export(const std::vector<std::string>& argv) {
+  if (wants_help(argv)) {
+    std::fputs(kHelp, stdout);
+    return 0;
+  }
+  auto args = Args::parse(argv, {{"--level"}, {"--bbox"}, {"--output", "-o"}, {"--quiet", "-q", false}},
+                          "export");
+  if (!args) return report_error(args.error().message);
+  if (args->positional().size() != 1) return report_error("export: expected exactly one STORE");
+  ingest::ExportOptions o;
+  o.store = args->positional()[0];
+  auto level = args->get_int("--level", 0, 30);
+  if (!level) return report_error(level.error().message);
+  if (!*level) return report_error("export: --level L is required");
+  o.level = **level;
+  if (auto b = args->get("--bbox")) {
+    auto box = parse_bbox(*b);
+    if (!box) return report_error(box.error().message);
+    o.bbox = *box;
+  }
+  if (!args->get("--output")) return report_error("export: -o OUT.tif is required");
+  o.output = *args->get("--output");
+  auto progress = args->has("--quiet") ? std::make_unique<NullProgress>() : make_progress_for_stderr();
+  auto report = ingest::export_geotiff(o, *progress);
+  if (!report) return report_error(report.error().message);
+  std::printf("wrote %s: %d x %d samples from %d tiles\n", o.output.c_str(), report->width,
+              report->height, report->tiles_read);
+  return 0;
+}
+
+}  // namespace relief::cli

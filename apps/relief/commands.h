@@ -1,0 +1,17 @@
+#pragma once
+#include <string>
+#include <vector>
+
+namespace relief::cli {
+
+// Each returns the process exit code; errors are printed as one line on stderr.
+int run_build(const std::vector<std::string>& args);
+int run_info(const std::vector<std::string>& args);
+int run_verify(const std::vector<std::string>& args);
+int run_export(const std::vector<std::string>& args);
+
+// Prints "relief: <message>" on stderr and returns 1.
+int report_error(const std::string& message);
+bool wants_help(const std::vector<std::string>& args);
+
+}  // namespace relief::cli

@@ -1,0 +1,67 @@
+// relief: the command line. Exceptions stop here; libraries return errors as values.
+#include <csignal>
+#include <cstdio>
+#include <exception>
+#include <string>
+#include <vector>
+
+#include "commands.h"
+
+namespace {
+
+constexpr const char* kUsage = R"(relief: explore very large terrain and remote-sensing rasters
+
+usage: relief <command> [options]
+
+commands:
+  build    turn rasters (GeoTIFF, SRTM .hgt, VRT, DTED, ...) into a tile pyramid store
+  info     describe a store: manifest, tiles and bytes per level, compression
+  verify   check every tile header and checksum of a store
+  export   reassemble one level of a store into a GeoTIFF
+
+Run 'relief <command> --help' for the options of a command.
+)";
+
+}  // namespace
+
+namespace relief::cli {
+
+int report_error(const std::string& message) {
+  std::fprintf(stderr, "relief: %s\n", message.c_str());
+  return 1;
+}
+
+bool wants_help(const std::vector<std::string>& args) {
+  for (const auto& a : args) {
+    if (a == "--help" || a == "-h") return true;
+  }
+  return false;
+}
+
+}  // namespace relief::cli
+
+int main(int argc, char** argv) {
+  // A write past a file-size limit must fail with EFBIG, not kill the process.
+  std::signal(SIGXFSZ, SIG_IGN);
+  std::vector<std::string> args(argv + 1, argv + argc);
+  if (args.empty() || args[0] == "--help" || args[0] == "-h" || args[0] == "help") {
+    std::fputs(kUsage, args.empty() ? stderr : stdout);
+    return args.empty() ? 2 : 0;
+  }
+  const std::string command = args[0];
+  args.erase(args.begin());
+  try {
+    if (command == "build") return relief::cli::run_build(args);
+    if (command == "info") return relief::cli::run_info(args);
+    if (command == "verify") return relief::cli::run_verify(args);
+    if (command == "export") return relief::cli::run_export(args);
+    if (command == "--version") {
+      std::puts("relief 0.1.0");
+      return 0;
+    }
+  } catch (const std::exception& e) {
+    return relief::cli::report_error(std::string("internal error: ") + e.what());
+  }
+  relief::cli::report_error("unknown command '" + command + "' (see relief --help)");
+  return 2;
+}

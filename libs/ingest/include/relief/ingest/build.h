@@ -1,0 +1,52 @@
+#pragma once
+// `relief build`: turns rasters GDAL can read into a tile pyramid store.
+//
+// Phases (each parallel over tiles, each resumable after a crash):
+//  1. warp     every finest-level tile interior is resampled from the sources
+//              (GDAL warper; bilinear for elevation/SAR, cubic for imagery)
+//  2. pyramid  coarser interiors by nodata-aware 2 x 2 averaging
+//  3. tiles    bordered tiles assembled from the 3 x 3 neighbouring interiors,
+//              so borders equal the neighbours' samples exactly; encoded and
+//              written atomically with per-tile statistics
+//  4. indices and manifest, written last: a store with a manifest is complete.
+// Interiors live in <store>/.build until the build finishes.
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "relief/base/parallel.h"
+#include "relief/base/progress.h"
+#include "relief/base/result.h"
+#include "relief/tiles/manifest.h"
+
+namespace relief::ingest {
+
+struct BuildOptions {
+  std::vector<std::string> inputs;
+  std::filesystem::path output;
+  tiles::DatasetKind kind = tiles::DatasetKind::Elevation;
+  std::optional<int> min_level;  // default 0
+  std::optional<int> max_level;  // default: next level finer than the finest source
+  std::optional<tiles::Codec> codec;  // default: zstd (lerc if max_error > 0); jpeg for imagery
+  double max_error = 0;               // LERC maximum absolute error
+  int quality = 90;                   // JPEG / WebP
+  int tile_log2_height = 8;
+  int border = 9;
+  uint64_t memory_budget = uint64_t{1} << 30;
+  bool overwrite = false;
+  std::optional<std::string> src_crs;  // for inputs without a CRS
+};
+
+struct BuildReport {
+  tiles::Manifest manifest;
+  uint64_t tiles_written = 0;
+  uint64_t tiles_resumed = 0;  // already present from an interrupted run
+  double seconds = 0;
+};
+
+Result<BuildReport> build_store(const BuildOptions& options, Executor& executor,
+                                Progress& progress);
+
+}  // namespace relief::ingest

@@ -1,0 +1,441 @@
+#include "relief/ingest/build.h"
+
+#include <gdal.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <mutex>
+#include <set>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "core_store.h"
+#include "gdal_env.h"
+#include "pyramid.h"
+#include "relief/base/file_io.h"
+#include "relief/tiles/store.h"
+#include "relief/tiles/store_layout.h"
+#include "source.h"
+#include "warp.h"
+
+namespace relief::ingest {
+namespace fs = std::filesystem;
+using geo::TileKey;
+
+namespace {
+
+constexpr const char* kBuildDir = ".build";
+constexpr const char* kStateName = "state.json";
+constexpr int kMaxSupportedLevel = 24;
+
+// The first error raised by any worker; later work is skipped once set.
+class FirstError {
+ public:
+  void set(Error e) {
+    std::lock_guard lock(mutex_);
+    if (!error_) error_ = std::move(e);
+    failed_ = true;
+  }
+  bool failed() const { return failed_; }
+  Status status() const {
+    if (error_) return std::unexpected(*error_);
+    return {};
+  }
+
+ private:
+  std::mutex mutex_;
+  std::optional<Error> error_;
+  std::atomic<bool> failed_{false};
+};
+
+// Everything that determines the output. A resumed build must match it exactly.
+std::string fingerprint(const BuildOptions& o, const tiles::CodecOptions& codec, int min_level,
+                        int max_level) {
+  nlohmann::json j;
+  nlohmann::json inputs = nlohmann::json::array();
+  for (const auto& in : o.inputs) {
+    std::error_code ec;
+    const auto size = fs::file_size(in, ec);
+    const auto mtime = fs::last_write_time(in, ec).time_since_epoch().count();
+    inputs.push_back({{"path", fs::absolute(in).string()}, {"size", ec ? 0 : size}, {"mtime", mtime}});
+  }
+  j["inputs"] = inputs;
+  j["kind"] = tiles::to_string(o.kind);
+  j["levels"] = {min_level, max_level};
+  j["codec"] = {tiles::to_string(codec.codec), codec.max_error, codec.quality};
+  j["tile"] = {o.tile_log2_height, o.border};
+  j["src_crs"] = o.src_crs.value_or("");
+  return j.dump();
+}
+
+bool is_store_like(const fs::path& dir) {
+  std::error_code ec;
+  return fs::exists(dir / tiles::kManifestName, ec) || fs::exists(dir / kBuildDir / kStateName, ec);
+}
+
+// Decides whether to start fresh, resume, or refuse. Returns true when resuming.
+Result<bool> prepare_output(const BuildOptions& o, const std::string& print) {
+  std::error_code ec;
+  const fs::path& out = o.output;
+  if (fs::exists(out, ec) && !fs::is_directory(out, ec)) {
+    return fail(fmt::format("{}: exists and is not a directory", out.string()));
+  }
+  const bool exists = fs::is_directory(out, ec);
+  const bool empty = exists && fs::is_empty(out, ec);
+  if (exists && !empty && !is_store_like(out)) {
+    return fail(fmt::format("{}: exists and is not a relief store; choose another output", out.string()));
+  }
+  if (exists && is_store_like(out)) {
+    const fs::path state = out / kBuildDir / kStateName;
+    const bool complete = fs::exists(out / tiles::kManifestName, ec);
+    if (!o.overwrite) {
+      if (complete) {
+        return fail(fmt::format("{}: store already exists (pass --overwrite to rebuild it)", out.string()));
+      }
+      auto text = read_text_file(state);
+      if (text && *text == print) return true;  // an interrupted build with the same parameters
+      return fail(fmt::format("{}: holds an interrupted build with other parameters "
+                              "(pass --overwrite to start again)", out.string()));
+    }
+    fs::remove_all(out, ec);
+    if (ec) return fail(fmt::format("{}: cannot remove the old store: {}", out.string(), ec.message()));
+  }
+  fs::create_directories(out / kBuildDir, ec);
+  if (ec) return fail(fmt::format("{}: cannot create: {}", out.string(), ec.message()));
+  RELIEF_CHECK(write_text_file_atomic(out / kBuildDir / kStateName, print));
+  return false;
+}
+
+tiles::CodecOptions choose_codec(const BuildOptions& o) {
+  tiles::CodecOptions c;
+  c.max_error = o.max_error;
+  c.quality = o.quality;
+  if (o.codec) c.codec = *o.codec;
+  else if (o.kind == tiles::DatasetKind::Imagery) c.codec = tiles::Codec::Jpeg;
+  else if (o.max_error > 0) c.codec = tiles::Codec::Lerc;
+  else c.codec = tiles::Codec::Zstd;
+  return c;
+}
+
+Status validate_options(const BuildOptions& o, const tiles::CodecOptions& codec) {
+  if (o.inputs.empty()) return fail("no input files given");
+  if (o.output.empty()) return fail("-o: no output store given");
+  const tiles::SampleType type =
+      o.kind == tiles::DatasetKind::Imagery ? tiles::SampleType::UInt8 : tiles::SampleType::Float32;
+  if (!tiles::codec_supports(codec.codec, type)) {
+    return fail(fmt::format("--codec: {} cannot store {} data", tiles::to_string(codec.codec),
+                            tiles::to_string(o.kind)));
+  }
+  if (o.max_error < 0 || !std::isfinite(o.max_error)) {
+    return fail(fmt::format("--max-error: {} must be a non-negative number", o.max_error));
+  }
+  if (o.max_error > 0 && codec.codec != tiles::Codec::Lerc) {
+    return fail("--max-error: only the lerc codec is lossy with a bounded error");
+  }
+  if (o.quality < 1 || o.quality > 100) return fail(fmt::format("--quality: {} is not in 1..100", o.quality));
+  if (o.memory_budget < (uint64_t{64} << 20)) return fail("--memory: the budget must be at least 64 MiB");
+  return {};
+}
+
+struct LevelResult {
+  tiles::LevelIndex index;
+  uint64_t written = 0, resumed = 0;
+};
+
+class Builder {
+ public:
+  Builder(const BuildOptions& o, std::vector<Source> sources, geo::TileGrid grid,
+          tiles::CodecOptions codec, int min_level, int max_level, Executor& ex, Progress& progress)
+      : o_(o), sources_(std::move(sources)), grid_(grid), codec_(codec), min_level_(min_level),
+        max_level_(max_level), ex_(ex), progress_(progress),
+        type_(o.kind == tiles::DatasetKind::Imagery ? tiles::SampleType::UInt8
+                                                    : tiles::SampleType::Float32),
+        cores_(o.output / kBuildDir / "cores", o.memory_budget / 2) {}
+
+  Result<BuildReport> run() {
+    const auto start = std::chrono::steady_clock::now();
+    RELIEF_CHECK(warp_finest());
+    for (int level = max_level_ - 1; level >= min_level_; --level) RELIEF_CHECK(build_parents(level));
+    BuildReport report;
+    std::vector<tiles::LevelIndex> indices;
+    for (int level = min_level_; level <= max_level_; ++level) {
+      LevelResult r = RELIEF_TRY(write_level(level));
+      report.tiles_written += r.written;
+      report.tiles_resumed += r.resumed;
+      indices.push_back(std::move(r.index));
+    }
+    if (indices.back().size() == 0) {
+      return fail(fmt::format("{}: the inputs hold no valid samples (nodata everywhere)",
+                              o_.inputs.front()));
+    }
+    for (const auto& index : indices) RELIEF_CHECK(tiles::write_level_index(o_.output, index));
+    report.manifest = make_manifest(indices.back());
+    RELIEF_CHECK(tiles::write_manifest(o_.output, report.manifest));
+    std::error_code ec;
+    fs::remove_all(o_.output / kBuildDir, ec);  // scratch only; the store is complete
+    report.seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return report;
+  }
+
+ private:
+  fs::path marker(const std::string& name) const { return o_.output / kBuildDir / (name + ".done"); }
+  bool done(const std::string& name) const {
+    std::error_code ec;
+    return fs::exists(marker(name), ec);
+  }
+  Status mark_done(const std::string& name) { return write_text_file_atomic(marker(name), "done\n"); }
+
+  std::vector<TileKey> finest_tiles() const {
+    std::set<TileKey> keys;
+    const double n = TileKey::tiles_per_side(max_level_);
+    for (const auto& s : sources_) {
+      const auto col = [&](double lon) { return static_cast<int64_t>(std::floor((lon + 180.0) / 360.0 * n)); };
+      const auto row = [&](double lat) {
+        return std::clamp<int64_t>(static_cast<int64_t>(std::floor((90.0 - lat) / 180.0 * n)), 0,
+                                   static_cast<int64_t>(n) - 1);
+      };
+      for (int64_t y = row(s.box.north); y <= row(s.box.south); ++y) {
+        for (int64_t x = col(s.box.west); x <= col(s.box.east); ++x) {
+          const int64_t wrapped = ((x % static_cast<int64_t>(n)) + static_cast<int64_t>(n)) % static_cast<int64_t>(n);
+          keys.insert({max_level_, static_cast<uint32_t>(wrapped), static_cast<uint32_t>(y)});
+        }
+      }
+    }
+    std::vector<TileKey> sorted(keys.begin(), keys.end());
+    std::sort(sorted.begin(), sorted.end(),
+              [](const auto& a, const auto& b) { return std::tie(a.y, a.x) < std::tie(b.y, b.x); });
+    return sorted;
+  }
+
+  Status warp_finest() {
+    const std::string phase = fmt::format("warp-{}", max_level_);
+    if (done(phase)) return {};
+    const auto keys = finest_tiles();
+    std::mutex pool_mutex;
+    std::vector<std::unique_ptr<TileWarper>> pool;  // one warper per concurrent worker
+    FirstError error;
+    progress_.begin(fmt::format("warp level {}", max_level_), keys.size());
+    ex_.parallel_for(keys.size(), [&](size_t i) {
+      if (!error.failed() && !cores_.exists(keys[i])) {
+        std::unique_ptr<TileWarper> warper;
+        {
+          std::lock_guard lock(pool_mutex);
+          if (!pool.empty()) {
+            warper = std::move(pool.back());
+            pool.pop_back();
+          }
+        }
+        if (!warper) warper = std::make_unique<TileWarper>(sources_, o_.kind, grid_);
+        auto core = warper->warp(keys[i]);
+        if (!core) error.set(core.error());
+        else if (core->stats(0, 0, core->width(), core->height()).valid_count > 0) {
+          if (auto st = cores_.write(keys[i], *core); !st) error.set(st.error());
+        }
+        std::lock_guard lock(pool_mutex);
+        pool.push_back(std::move(warper));
+      }
+      progress_.advance();
+    });
+    progress_.end();
+    RELIEF_CHECK(error.status());
+    return mark_done(phase);
+  }
+
+  Status build_parents(int level) {
+    const std::string phase = fmt::format("pyramid-{}", level);
+    if (done(phase)) return {};
+    std::set<TileKey> parent_set;
+    for (const auto& child : cores_.list(level + 1)) parent_set.insert(*child.parent());
+    const std::vector<TileKey> parents(parent_set.begin(), parent_set.end());
+    FirstError error;
+    progress_.begin(fmt::format("pyramid level {}", level), parents.size());
+    ex_.parallel_for(parents.size(), [&](size_t i) {
+      const TileKey& p = parents[i];
+      if (!error.failed() && !cores_.exists(p)) {
+        std::array<std::shared_ptr<const tiles::Raster>, 4> held;
+        std::array<const tiles::Raster*, 4> children{};
+        for (int c = 0; c < 4; ++c) {
+          auto child = cores_.read(p.child(c % 2, c / 2));
+          if (!child) {
+            error.set(child.error());
+            break;
+          }
+          held[static_cast<size_t>(c)] = *child;
+          children[static_cast<size_t>(c)] = child->get();
+        }
+        if (!error.failed()) {
+          const tiles::Raster core = downsample(children, grid_.width(), grid_.height(), type_);
+          if (auto st = cores_.write(p, core); !st) error.set(st.error());
+        }
+      }
+      progress_.advance();
+    });
+    progress_.end();
+    RELIEF_CHECK(error.status());
+    return mark_done(phase);
+  }
+
+  Result<LevelResult> write_level(int level) {
+    const auto keys = cores_.list(level);
+    std::mutex mutex;
+    LevelResult result{tiles::LevelIndex(level)};
+    FirstError error;
+    progress_.begin(fmt::format("tiles level {}", level), keys.size());
+    ex_.parallel_for(keys.size(), [&](size_t i) {
+      if (!error.failed()) {
+        auto entry = write_tile(keys[i]);
+        if (!entry) error.set(entry.error());
+        else {
+          std::lock_guard lock(mutex);
+          result.index.add(entry->first);
+          (entry->second ? result.resumed : result.written) += 1;
+        }
+      }
+      progress_.advance();
+    });
+    progress_.end();
+    RELIEF_CHECK(error.status());
+    return result;
+  }
+
+  // Writes one bordered tile unless a valid one is already there. Returns its
+  // index entry and whether it was resumed.
+  Result<std::pair<tiles::IndexEntry, bool>> write_tile(const TileKey& key) {
+    const fs::path path = o_.output / tiles::tile_relative_path(key);
+    std::error_code ec;
+    if (fs::exists(path, ec)) {
+      auto bytes = read_file(path);
+      if (bytes) {
+        if (auto h = tiles::parse_tile_header(*bytes, path.string())) {
+          return std::pair{entry_for(key, *h, bytes->size()), true};
+        }
+      }
+    }
+    std::array<std::shared_ptr<const tiles::Raster>, 9> held;
+    std::array<const tiles::Raster*, 9> around{};
+    for (int dy = -1; dy <= 1; ++dy) {
+      for (int dx = -1; dx <= 1; ++dx) {
+        auto n = key.neighbour(dx, dy);
+        if (!n) continue;
+        auto core = RELIEF_TRY(cores_.read(*n));
+        const size_t slot = static_cast<size_t>((dy + 1) * 3 + dx + 1);
+        held[slot] = core;
+        around[slot] = core.get();
+      }
+    }
+    const tiles::Raster bordered =
+        assemble_bordered(around, grid_.width(), grid_.height(), grid_.border(), type_);
+    auto bytes = RELIEF_TRY(tiles::encode_tile(bordered, grid_.border(), codec_));
+    RELIEF_CHECK(tiles::write_tile_file(o_.output, key, bytes));
+    auto header = RELIEF_TRY(tiles::parse_tile_header(bytes, path.string()));
+    return std::pair{entry_for(key, header, bytes.size()), false};
+  }
+
+  static tiles::IndexEntry entry_for(const TileKey& key, const tiles::TileHeader& h, size_t bytes) {
+    return {key, static_cast<float>(h.stats.min), static_cast<float>(h.stats.max),
+            static_cast<uint32_t>(h.stats.valid_count), static_cast<uint32_t>(bytes)};
+  }
+
+  tiles::Manifest make_manifest(const tiles::LevelIndex& finest) {
+    tiles::Manifest m;
+    m.kind = o_.kind;
+    m.sample_type = type_;
+    m.bands = type_ == tiles::SampleType::Float32 ? 1 : 4;
+    m.units = o_.kind == tiles::DatasetKind::Elevation ? "m"
+              : o_.kind == tiles::DatasetKind::Sar    ? "amplitude"
+                                                      : "";
+    m.tile_log2_height = grid_.log2_height();
+    m.border = grid_.border();
+    m.min_level = min_level_;
+    m.max_level = max_level_;
+    m.codec = codec_;
+    m.created_by = "relief build";
+    m.extent = sources_.front().box;
+    for (const auto& s : sources_) {
+      m.extent.west = std::min(m.extent.west, s.box.west);
+      m.extent.south = std::min(m.extent.south, s.box.south);
+      m.extent.east = std::max(m.extent.east, s.box.east);
+      m.extent.north = std::max(m.extent.north, s.box.north);
+      m.sources.push_back(to_source_info(s));
+    }
+    m.stats = combined_stats(finest);
+    return m;
+  }
+
+  // Global statistics from the finest tiles' header statistics (interiors only,
+  // so no sample counts twice).
+  tiles::SampleStats combined_stats(const tiles::LevelIndex& finest) {
+    double count = 0, sum = 0, sum_sq = 0;
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (const auto& e : finest.entries()) {
+      auto bytes = read_file(o_.output / tiles::tile_relative_path(e.key));
+      if (!bytes) continue;
+      auto h = tiles::parse_tile_header(*bytes, "");
+      if (!h || h->stats.valid_count == 0) continue;
+      const double n = static_cast<double>(h->stats.valid_count) * (type_ == tiles::SampleType::UInt8 ? 3 : 1);
+      count += n;
+      sum += h->stats.mean * n;
+      sum_sq += (h->stats.stddev * h->stats.stddev + h->stats.mean * h->stats.mean) * n;
+      lo = std::min(lo, h->stats.min);
+      hi = std::max(hi, h->stats.max);
+    }
+    tiles::SampleStats s;
+    if (count == 0) return s;
+    s.min = lo;
+    s.max = hi;
+    s.mean = sum / count;
+    s.stddev = std::sqrt(std::max(0.0, sum_sq / count - s.mean * s.mean));
+    uint64_t valid = 0;
+    for (const auto& e : finest.entries()) valid += e.valid_count;
+    s.valid_count = valid;
+    return s;
+  }
+
+  const BuildOptions& o_;
+  std::vector<Source> sources_;
+  geo::TileGrid grid_;
+  tiles::CodecOptions codec_;
+  int min_level_, max_level_;
+  Executor& ex_;
+  Progress& progress_;
+  tiles::SampleType type_;
+  CoreStore cores_;
+};
+
+}  // namespace
+
+Result<BuildReport> build_store(const BuildOptions& o, Executor& executor, Progress& progress) {
+  const tiles::CodecOptions codec = choose_codec(o);
+  RELIEF_CHECK(validate_options(o, codec));
+  auto grid = geo::TileGrid::create(o.tile_log2_height, o.border);
+  if (!grid) return fail(fmt::format("--tile-size/--border: {}", grid.error().message));
+
+  init_gdal();
+  // GDAL's block cache gets a quarter of the budget; decoded interiors half.
+  GDALSetCacheMax64(static_cast<GIntBig>(o.memory_budget / 4));
+  std::vector<Source> sources;
+  for (const auto& input : o.inputs) sources.push_back(RELIEF_TRY(describe_source(input, o.kind, o.src_crs)));
+  RELIEF_CHECK(check_compatible(sources));
+
+  double finest_spacing = std::numeric_limits<double>::infinity();
+  for (const auto& s : sources) finest_spacing = std::min(finest_spacing, s.spacing_deg);
+  const int max_level = o.max_level.value_or(grid->level_for_spacing(finest_spacing));
+  const int min_level = o.min_level.value_or(0);
+  if (max_level < 0 || max_level > kMaxSupportedLevel) {
+    return fail(fmt::format("--max-level: {} is not in 0..{}", max_level, kMaxSupportedLevel));
+  }
+  if (min_level < 0 || min_level > max_level) {
+    return fail(fmt::format("--min-level: {} is not in 0..{}", min_level, max_level));
+  }
+  const std::string print = fingerprint(o, codec, min_level, max_level);
+  RELIEF_TRY(prepare_output(o, print));
+  Builder builder(o, std::move(sources), *grid, codec, min_level, max_level, executor, progress);
+  return builder.run();
+}
+
+}  // namespace relief::ingest

@@ -1,0 +1,150 @@
+#include "source.h"
+
+#include <cpl_conv.h>
+#include <gdal_alg.h>
+#include <ogr_srs_api.h>
+
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "gdal_env.h"
+
+namespace relief::ingest {
+namespace {
+
+bool is_complex(GDALDataType t) { return GDALDataTypeIsComplex(t) != 0; }
+
+std::string authority_name(OGRSpatialReferenceH srs, const std::string& wkt) {
+  OSRAutoIdentifyEPSG(srs);
+  const char* name = OSRGetAuthorityName(srs, nullptr);
+  const char* code = OSRGetAuthorityCode(srs, nullptr);
+  if (name && code) return fmt::format("{}:{}", name, code);
+  return wkt;
+}
+
+struct SrsDeleter {
+  void operator()(OGRSpatialReferenceH h) const { OSRDestroySpatialReference(h); }
+};
+
+}  // namespace
+
+Result<Source> describe_source(const std::string& path, tiles::DatasetKind kind,
+                               const std::optional<std::string>& src_crs) {
+  Dataset ds = open_raster(path);
+  if (!ds) return fail(fmt::format("{}: {}", path, gdal_error("not a raster GDAL can read")));
+  Source s;
+  s.path = path;
+  s.width = GDALGetRasterXSize(ds.get());
+  s.height = GDALGetRasterYSize(ds.get());
+  const int bands = GDALGetRasterCount(ds.get());
+  if (bands == 0 || s.width == 0 || s.height == 0) {
+    return fail(fmt::format("{}: has no raster bands", path));
+  }
+  const GDALDataType type = GDALGetRasterDataType(GDALGetRasterBand(ds.get(), 1));
+  s.data_type = GDALGetDataTypeName(type);
+  if (is_complex(type)) {
+    return fail(fmt::format("{}: unsupported data type {} (complex samples; convert to amplitude first)",
+                            path, s.data_type));
+  }
+  const GDALColorInterp last = GDALGetRasterColorInterpretation(GDALGetRasterBand(ds.get(), bands));
+  s.has_alpha = bands > 1 && last == GCI_AlphaBand;
+  s.colour_bands = bands - (s.has_alpha ? 1 : 0);
+  if (kind == tiles::DatasetKind::Imagery) {
+    if (type != GDT_Byte) {
+      return fail(fmt::format("{}: unsupported data type {} for imagery (8-bit bands needed)", path,
+                              s.data_type));
+    }
+    if (s.colour_bands != 1 && s.colour_bands != 3) {
+      return fail(fmt::format("{}: has {} colour bands; imagery needs 1 (grey) or 3 (RGB)", path,
+                              s.colour_bands));
+    }
+  } else if (s.colour_bands != 1) {
+    return fail(fmt::format("{}: has {} bands; {} data needs exactly one", path, bands,
+                            tiles::to_string(kind)));
+  }
+
+  // Georeferencing: a geotransform (rotated ones included) or GCPs, and a CRS.
+  double gt[6];
+  const bool has_gt = GDALGetGeoTransform(ds.get(), gt) == CE_None;
+  const bool has_gcps = GDALGetGCPCount(ds.get()) > 0;
+  if (!has_gt && !has_gcps) {
+    return fail(fmt::format("{}: has no georeferencing (no geotransform or GCPs)", path));
+  }
+  const char* wkt = has_gt ? GDALGetProjectionRef(ds.get()) : GDALGetGCPProjection(ds.get());
+  s.crs_wkt = wkt ? wkt : "";
+  if (src_crs) {
+    OGRSpatialReferenceH srs = OSRNewSpatialReference(nullptr);
+    std::unique_ptr<void, SrsDeleter> guard(srs);
+    if (OSRSetFromUserInput(srs, src_crs->c_str()) != OGRERR_NONE) {
+      return fail(fmt::format("--src-crs: '{}' is not a coordinate reference system", *src_crs));
+    }
+    char* out = nullptr;
+    OSRExportToWkt(srs, &out);
+    s.crs_wkt = out;
+    CPLFree(out);
+  }
+  if (s.crs_wkt.empty()) {
+    return fail(fmt::format("{}: has a geotransform but no coordinate reference system "
+                            "(pass --src-crs, e.g. --src-crs EPSG:4326)", path));
+  }
+  {
+    OGRSpatialReferenceH srs = OSRNewSpatialReference(s.crs_wkt.c_str());
+    std::unique_ptr<void, SrsDeleter> guard(srs);
+    s.crs_name = srs ? authority_name(srs, s.crs_wkt) : s.crs_wkt;
+  }
+
+  // Footprint and resolution in WGS84 geographic coordinates.
+  OGRSpatialReferenceH wgs84 = OSRNewSpatialReference(nullptr);
+  std::unique_ptr<void, SrsDeleter> wgs84_guard(wgs84);
+  OSRImportFromEPSG(wgs84, 4326);
+  OSRSetAxisMappingStrategy(wgs84, OAMS_TRADITIONAL_GIS_ORDER);
+  char* dst_wkt = nullptr;
+  OSRExportToWkt(wgs84, &dst_wkt);
+  const char* options[] = {nullptr, nullptr, nullptr};
+  const std::string src_opt = "SRC_SRS=" + s.crs_wkt;
+  const std::string dst_opt = std::string("DST_SRS=") + dst_wkt;
+  CPLFree(dst_wkt);
+  options[0] = src_opt.c_str();
+  options[1] = dst_opt.c_str();
+  void* transformer = GDALCreateGenImgProjTransformer2(ds.get(), nullptr, const_cast<char**>(options));
+  if (!transformer) {
+    return fail(fmt::format("{}: cannot transform to WGS84: {}", path, gdal_error("unknown error")));
+  }
+  double out_gt[6];
+  int px = 0, py = 0;
+  double extent[4];
+  const CPLErr err = GDALSuggestedWarpOutput2(ds.get(), GDALGenImgProjTransform, transformer,
+                                              out_gt, &px, &py, extent, 0);
+  GDALDestroyGenImgProjTransformer(transformer);
+  if (err != CE_None) {
+    return fail(fmt::format("{}: cannot compute its WGS84 footprint: {}", path,
+                            gdal_error("unknown error")));
+  }
+  s.box = {extent[0], extent[1], extent[2], extent[3]};
+  s.spacing_deg = std::min(std::abs(out_gt[1]), std::abs(out_gt[5]));
+  if (!(s.spacing_deg > 0) || s.box.south < -90.0001 || s.box.north > 90.0001 ||
+      s.box.west >= s.box.east) {
+    return fail(fmt::format("{}: georeferencing gives an impossible WGS84 footprint", path));
+  }
+  s.box.south = std::max(s.box.south, -90.0);
+  s.box.north = std::min(s.box.north, 90.0);
+  return s;
+}
+
+Status check_compatible(const std::vector<Source>& sources) {
+  for (const auto& s : sources) {
+    if (s.colour_bands != sources.front().colour_bands) {
+      return fail(fmt::format("{}: has {} colour bands but {} has {}; inputs must match", s.path,
+                              s.colour_bands, sources.front().path, sources.front().colour_bands));
+    }
+  }
+  return {};
+}
+
+tiles::SourceInfo to_source_info(const Source& s) {
+  return {s.path, s.crs_name, s.width, s.height, s.colour_bands + (s.has_alpha ? 1 : 0),
+          s.data_type};
+}
+
+}  // namespace relief::ingest

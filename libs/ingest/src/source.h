@@ -1,0 +1,34 @@
+#pragma once
+// Validation and description of build inputs: what each file is, where it lies
+// in WGS84 longitude/latitude and how fine its samples are.
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "relief/base/result.h"
+#include "relief/geo/tile_key.h"
+#include "relief/tiles/manifest.h"
+
+namespace relief::ingest {
+
+struct Source {
+  std::string path;
+  std::string crs_wkt;   // as given, or from --src-crs
+  std::string crs_name;  // authority code when known, else WKT
+  int width = 0, height = 0;
+  int colour_bands = 0;  // bands carried into the store (alpha excluded)
+  bool has_alpha = false;
+  std::string data_type;
+  geo::GeoBox box;           // lon/lat extent; east may exceed 180 if it crosses the antimeridian
+  double spacing_deg = 0;    // sample spacing in degrees after reprojection
+};
+
+// Opens `path` and checks that it can go into a dataset of `kind`.
+Result<Source> describe_source(const std::string& path, tiles::DatasetKind kind,
+                               const std::optional<std::string>& src_crs);
+// Checks that the sources can be mosaicked into one dataset.
+Status check_compatible(const std::vector<Source>& sources);
+
+tiles::SourceInfo to_source_info(const Source& s);
+
+}  // namespace relief::ingest
