@@ -30,6 +30,8 @@ options:
   --memory SIZE        memory budget, e.g. 512MiB, 2GiB (default 1GiB)
   --threads N          worker threads (default: one per core)
   --src-crs CRS        CRS for inputs that have none (e.g. EPSG:4326)
+  --warp-error PX      reprojection error allowed, in source pixels (default 0.125,
+                       as gdalwarp -et; 0 transforms every sample exactly)
   --overwrite          replace an existing store
   -q, --quiet          no progress bar
 )";
@@ -54,7 +56,7 @@ int run_build(const std::vector<std::string>& argv) {
   auto args = Args::parse(argv,
                           {{"--output", "-o"}, {"--kind"}, {"--max-level"}, {"--min-level"},
                            {"--codec"}, {"--max-error"}, {"--quality"}, {"--tile-size"},
-                           {"--border"}, {"--memory"}, {"--threads"}, {"--src-crs"},
+                           {"--border"}, {"--memory"}, {"--threads"}, {"--src-crs"}, {"--warp-error"},
                            {"--overwrite", "", false}, {"--quiet", "-q", false}},
                           "build");
   if (!args) return report_error(args.error().message);
@@ -102,6 +104,9 @@ int run_build(const std::vector<std::string>& argv) {
   auto threads = args->get_int("--threads", 1, 1024);
   if (!threads) return fail_on(threads.error());
   if (auto crs = args->get("--src-crs")) o.src_crs = *crs;
+  auto warp_error = args->get_double("--warp-error");
+  if (!warp_error) return fail_on(warp_error.error());
+  if (*warp_error) o.warp_error = **warp_error;
   o.overwrite = args->has("--overwrite");
 
   ThreadExecutor executor(threads->value_or(0));

@@ -69,6 +69,7 @@ std::string fingerprint(const BuildOptions& o, const tiles::CodecOptions& codec,
   j["codec"] = {tiles::to_string(codec.codec), codec.max_error, codec.quality};
   j["tile"] = {o.tile_log2_height, o.border};
   j["src_crs"] = o.src_crs.value_or("");
+  j["warp_error"] = o.warp_error;
   return j.dump();
 }
 
@@ -137,6 +138,9 @@ Status validate_options(const BuildOptions& o, const tiles::CodecOptions& codec)
     return fail("--max-error: only the lerc codec is lossy with a bounded error");
   }
   if (o.quality < 1 || o.quality > 100) return fail(fmt::format("--quality: {} is not in 1..100", o.quality));
+  if (!(o.warp_error >= 0 && o.warp_error <= 10)) {
+    return fail(fmt::format("--warp-error: {} is not in 0..10 pixels", o.warp_error));
+  }
   if (o.memory_budget < (uint64_t{64} << 20)) return fail("--memory: the budget must be at least 64 MiB");
   return {};
 }
@@ -154,6 +158,7 @@ class Builder {
         max_level_(max_level), ex_(ex), progress_(progress),
         type_(o.kind == tiles::DatasetKind::Imagery ? tiles::SampleType::UInt8
                                                     : tiles::SampleType::Float32),
+        groups_(group_sources(sources_)),
         cores_(o.output / kBuildDir / "cores", o.memory_budget / 2) {}
 
   Result<BuildReport> run() {
@@ -230,7 +235,9 @@ class Builder {
             pool.pop_back();
           }
         }
-        if (!warper) warper = std::make_unique<TileWarper>(sources_, o_.kind, grid_);
+        if (!warper) {
+          warper = std::make_unique<TileWarper>(sources_, groups_, o_.kind, grid_, o_.warp_error);
+        }
         auto core = warper->warp(keys[i]);
         if (!core) error.set(core.error());
         else if (core->stats(0, 0, core->width(), core->height()).valid_count > 0) {
@@ -404,6 +411,7 @@ class Builder {
   Executor& ex_;
   Progress& progress_;
   tiles::SampleType type_;
+  std::vector<MosaicGroup> groups_;
   CoreStore cores_;
 };
 

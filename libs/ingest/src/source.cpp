@@ -71,6 +71,7 @@ Result<Source> describe_source(const std::string& path, tiles::DatasetKind kind,
   if (!has_gt && !has_gcps) {
     return fail(fmt::format("{}: has no georeferencing (no geotransform or GCPs)", path));
   }
+  s.north_up = has_gt && gt[2] == 0 && gt[4] == 0;
   const char* wkt = has_gt ? GDALGetProjectionRef(ds.get()) : GDALGetGCPProjection(ds.get());
   s.crs_wkt = wkt ? wkt : "";
   if (src_crs) {

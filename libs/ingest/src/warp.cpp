@@ -11,13 +11,14 @@
 namespace relief::ingest {
 namespace {
 
-constexpr size_t kMaxOpenSources = 64;
-
 const char* kWgs84Wkt =
     R"(GEOGCS["WGS 84",DATUM["WGS_1984",SPHEROID["WGS 84",6378137,298.257223563]],PRIMEM["Greenwich",0],UNIT["degree",0.0174532925199433],AUTHORITY["EPSG","4326"]])";
 
 struct WarpOptionsDeleter {
   void operator()(GDALWarpAppOptions* o) const { GDALWarpAppOptionsFree(o); }
+};
+struct VrtOptionsDeleter {
+  void operator()(GDALBuildVRTOptions* o) const { GDALBuildVRTOptionsFree(o); }
 };
 
 bool boxes_meet(const geo::GeoBox& tile, const geo::GeoBox& src) {
@@ -31,48 +32,85 @@ bool boxes_meet(const geo::GeoBox& tile, const geo::GeoBox& src) {
 
 }  // namespace
 
-TileWarper::TileWarper(const std::vector<Source>& sources, tiles::DatasetKind kind,
-                       geo::TileGrid grid)
-    : sources_(sources), kind_(kind), grid_(grid) {}
+std::vector<MosaicGroup> group_sources(const std::vector<Source>& sources) {
+  std::vector<MosaicGroup> groups;
+  for (size_t i = 0; i < sources.size(); ++i) {
+    const Source& s = sources[i];
+    MosaicGroup* target = nullptr;
+    if (s.north_up && !groups.empty()) {
+      // Only join the most recent group, so later inputs still land on top.
+      const Source& head = sources[groups.back().members.front()];
+      if (head.north_up && head.crs_wkt == s.crs_wkt) target = &groups.back();
+    }
+    if (!target) {
+      groups.push_back({{}, s.box});
+      target = &groups.back();
+    }
+    target->members.push_back(i);
+    geo::GeoBox& b = target->box;
+    b = {std::min(b.west, s.box.west), std::min(b.south, s.box.south),
+         std::max(b.east, s.box.east), std::max(b.north, s.box.north)};
+  }
+  return groups;
+}
 
-std::vector<size_t> TileWarper::sources_for(const geo::TileKey& key) const {
+TileWarper::TileWarper(const std::vector<Source>& sources, const std::vector<MosaicGroup>& groups,
+                       tiles::DatasetKind kind, geo::TileGrid grid, double error_threshold)
+    : sources_(sources), groups_(groups), kind_(kind), grid_(grid),
+      error_threshold_(error_threshold), open_(groups.size()) {}
+
+std::vector<size_t> TileWarper::groups_for(const geo::TileKey& key) const {
   // Pad by two samples so bilinear support at the tile edge is never cut off.
   geo::GeoBox b = key.bounds();
   const double pad = 2 * grid_.sample_spacing(key.level);
   b = {b.west - pad, b.south - pad, b.east + pad, b.north + pad};
   std::vector<size_t> hits;
-  for (size_t i = 0; i < sources_.size(); ++i) {
-    if (boxes_meet(b, sources_[i].box)) hits.push_back(i);
+  for (size_t g = 0; g < groups_.size(); ++g) {
+    if (boxes_meet(b, groups_[g].box)) hits.push_back(g);
   }
   return hits;
 }
 
-Result<GDALDatasetH> TileWarper::source_handle(size_t i) {
-  if (auto it = open_.find(i); it != open_.end()) return it->second.get();
-  if (open_.size() >= kMaxOpenSources) open_.clear();
-  Dataset ds = open_raster(sources_[i].path);
-  if (!ds) return fail(fmt::format("{}: {}", sources_[i].path, gdal_error("cannot reopen")));
-  if (!sources_[i].crs_wkt.empty()) GDALSetProjection(ds.get(), sources_[i].crs_wkt.c_str());
-  GDALDatasetH h = ds.get();
-  open_.emplace(i, std::move(ds));
-  return h;
+Result<GDALDatasetH> TileWarper::group_handle(size_t g) {
+  if (open_[g]) return open_[g].get();
+  const MosaicGroup& group = groups_[g];
+  const Source& first = sources_[group.members.front()];
+  Dataset ds;
+  if (group.members.size() == 1) {
+    ds = open_raster(first.path);
+  } else {
+    std::vector<const char*> paths;
+    for (size_t m : group.members) paths.push_back(sources_[m].path.c_str());
+    // Keep the finest input resolution; later inputs are drawn on top.
+    const char* argv[] = {"-resolution", "highest", nullptr};
+    std::unique_ptr<GDALBuildVRTOptions, VrtOptionsDeleter> options(
+        GDALBuildVRTOptionsNew(const_cast<char**>(argv), nullptr));
+    int usage_error = 0;
+    ds = Dataset(GDALBuildVRT("", static_cast<int>(paths.size()), nullptr, paths.data(),
+                              options.get(), &usage_error));
+  }
+  if (!ds) return fail(fmt::format("{}: {}", first.path, gdal_error("cannot open for reading")));
+  // --src-crs may have supplied a CRS the file lacks.
+  if (!first.crs_wkt.empty()) GDALSetProjection(ds.get(), first.crs_wkt.c_str());
+  open_[g] = std::move(ds);
+  return open_[g].get();
 }
 
 Result<tiles::Raster> TileWarper::warp(const geo::TileKey& key) {
   const bool imagery = kind_ == tiles::DatasetKind::Imagery;
   const int w = grid_.width(), h = grid_.height();
-  auto hits = sources_for(key);
+  auto hits = groups_for(key);
   if (hits.empty()) return tiles::Raster::empty(imagery ? tiles::SampleType::UInt8 : tiles::SampleType::Float32, w, h);
 
   std::vector<GDALDatasetH> handles;
-  for (size_t i : hits) {
-    auto hnd = source_handle(i);
+  for (size_t g : hits) {
+    auto hnd = group_handle(g);
     if (!hnd) return std::unexpected(hnd.error());
     handles.push_back(*hnd);
   }
 
   // Destination: the tile interior as an in-memory dataset on the WGS84 grid.
-  const int colour = imagery ? sources_[hits[0]].colour_bands : 1;
+  const int colour = imagery ? sources_.front().colour_bands : 1;
   const int dst_bands = imagery ? colour + 1 : 1;
   GDALDriverH mem = GDALGetDriverByName("MEM");
   Dataset dst(GDALCreate(mem, "", w, h, dst_bands, imagery ? GDT_Byte : GDT_Float32, nullptr));
@@ -94,8 +132,20 @@ Result<tiles::Raster> TileWarper::warp(const geo::TileKey& key) {
   // keeps upsampled photographs sharper and is clamped to 0..255 by GDAL.
   // No INIT_DEST: it would re-initialise the tile for every source and erase
   // the earlier ones. The destination starts as nodata (NaN or alpha 0).
-  std::vector<const char*> args = {"-r", imagery ? "cubic" : "bilinear",
-                                   "-q"};
+  const std::string threshold = fmt::format("{}", error_threshold_);
+  // GDAL derives the resampling scale per chunk from the shape of the source
+  // window, which for rotated or reprojected inputs varies between tiles and
+  // would make neighbouring tiles interpolate differently. Fix it from the
+  // resolutions instead: plain 2 x 2 bilinear (or 4 x 4 cubic) when upsampling,
+  // which is what a build does unless --max-level asks for a coarser level.
+  double source_spacing = INFINITY;
+  for (size_t g : hits) {
+    for (size_t m : groups_[g].members) source_spacing = std::min(source_spacing, sources_[m].spacing_deg);
+  }
+  const double scale = std::min(1.0, source_spacing / grid_.sample_spacing(key.level));
+  const std::string xscale = fmt::format("XSCALE={}", scale), yscale = fmt::format("YSCALE={}", scale);
+  std::vector<const char*> args = {"-r", imagery ? "cubic" : "bilinear", "-et", threshold.c_str(),
+                                   "-wo", xscale.c_str(), "-wo", yscale.c_str(), "-q"};
   if (imagery) args.push_back("-dstalpha");
   else {
     args.insert(args.end(), {"-dstnodata", "nan"});
@@ -109,7 +159,8 @@ Result<tiles::Raster> TileWarper::warp(const geo::TileKey& key) {
   GDALDatasetH out = GDALWarp(nullptr, dst.get(), static_cast<int>(handles.size()), handles.data(),
                               options.get(), &usage_error);
   if (!out || usage_error) {
-    return fail(fmt::format("{}: reprojection to tile {} failed: {}", sources_[hits[0]].path,
+    return fail(fmt::format("{}: reprojection to tile {} failed: {}",
+                            sources_[groups_[hits[0]].members[0]].path,
                             key.to_string(), gdal_error("unknown GDAL error")));
   }
 

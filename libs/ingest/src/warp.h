@@ -2,7 +2,11 @@
 // Resamples the sources onto the interior samples of one finest-level tile,
 // through GDAL's warper. Not thread-safe: each worker owns a TileWarper, which
 // opens its own GDAL datasets (GDAL datasets must not be shared by threads).
-#include <map>
+//
+// Sources that share a CRS and have north-up geotransforms are first mosaicked
+// on their native grid (a VRT, later inputs on top), so bilinear interpolation
+// across the seam between two inputs uses samples of both; warping them one by
+// one would let each input's edge half-pixel overwrite its neighbour's data.
 #include <string>
 #include <vector>
 
@@ -15,22 +19,34 @@
 
 namespace relief::ingest {
 
+struct MosaicGroup {
+  std::vector<size_t> members;  // indices into the source list, in input order
+  geo::GeoBox box;              // union of the members' footprints
+};
+// Groups sources for mosaicking, keeping input order between groups.
+std::vector<MosaicGroup> group_sources(const std::vector<Source>& sources);
+
 class TileWarper {
  public:
-  TileWarper(const std::vector<Source>& sources, tiles::DatasetKind kind, geo::TileGrid grid);
+  // error_threshold: largest error in source pixels of GDAL's approximate
+  // transformer (0 = transform every sample exactly), as gdalwarp -et.
+  TileWarper(const std::vector<Source>& sources, const std::vector<MosaicGroup>& groups,
+             tiles::DatasetKind kind, geo::TileGrid grid, double error_threshold);
 
   // The tile's interior (no border). A tile no source covers comes back empty
   // (all nodata), which callers check with stats().valid_count.
   Result<tiles::Raster> warp(const geo::TileKey& key);
-  // Indices of the sources whose footprint meets the tile (antimeridian-aware).
-  std::vector<size_t> sources_for(const geo::TileKey& key) const;
 
  private:
-  Result<GDALDatasetH> source_handle(size_t i);
+  std::vector<size_t> groups_for(const geo::TileKey& key) const;
+  Result<GDALDatasetH> group_handle(size_t g);
+
   const std::vector<Source>& sources_;
+  const std::vector<MosaicGroup>& groups_;
   tiles::DatasetKind kind_;
   geo::TileGrid grid_;
-  std::map<size_t, Dataset> open_;
+  double error_threshold_;
+  std::vector<Dataset> open_;  // per group, opened on first use
 };
 
 }  // namespace relief::ingest

@@ -1,0 +1,39 @@
+#pragma once
+// Helpers shared by the integration tests: scratch directories, running the
+// relief binary, and building stores from the bundled data.
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace relief::testing {
+
+std::filesystem::path data_dir();  // the repository's data/
+std::string data(const std::string& relative);
+
+// A fresh directory under the system temp dir, removed by the destructor.
+class ScratchDir {
+ public:
+  explicit ScratchDir(const std::string& name);
+  ~ScratchDir();
+  ScratchDir(const ScratchDir&) = delete;
+  ScratchDir& operator=(const ScratchDir&) = delete;
+  const std::filesystem::path& path() const { return path_; }
+  std::filesystem::path operator/(const std::string& p) const { return path_ / p; }
+
+ private:
+  std::filesystem::path path_;
+};
+
+struct RunResult {
+  int exit_code = -1;
+  std::string out, err;
+};
+
+// Runs the relief binary with the arguments (shell-quoted), optionally prefixed
+// by a shell snippet (e.g. "ulimit -f 100;").
+RunResult run_relief(const std::vector<std::string>& args, const std::string& shell_prefix = "");
+
+// Files below `dir` whose names mark an interrupted atomic write.
+std::vector<std::filesystem::path> temporary_files(const std::filesystem::path& dir);
+
+}  // namespace relief::testing
