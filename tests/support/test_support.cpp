@@ -26,6 +26,24 @@ ScratchDir::~ScratchDir() {
   fs::remove_all(path_, ec);
 }
 
+std::string relief_binary() { return RELIEF_BINARY; }
+
+int spawn_relief(const std::vector<std::string>& args) {
+  std::vector<std::string> all = {RELIEF_BINARY};
+  all.insert(all.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  for (auto& a : all) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    ::freopen("/dev/null", "w", stdout);
+    ::freopen("/dev/null", "w", stderr);
+    ::execv(argv[0], argv.data());
+    ::_exit(127);
+  }
+  return pid;
+}
+
 namespace {
 std::string quote(const std::string& s) {
   std::string q = "'";

@@ -29,6 +29,11 @@ struct RunResult {
   std::string out, err;
 };
 
+std::string relief_binary();
+
+// Starts the relief binary in the background; returns its pid.
+int spawn_relief(const std::vector<std::string>& args);
+
 // Runs the relief binary with the arguments (shell-quoted), optionally prefixed
 // by a shell snippet (e.g. "ulimit -f 100;").
 RunResult run_relief(const std::vector<std::string>& args, const std::string& shell_prefix = "");

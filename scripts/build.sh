@@ -1,0 +1,7 @@
+#!/usr/bin/env bash
+# Configures and builds relief into build/ (or $RELIEF_BUILD_DIR).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+BUILD_DIR=${RELIEF_BUILD_DIR:-build}
+cmake -S . -B "$BUILD_DIR" -G Ninja -DCMAKE_BUILD_TYPE=${CMAKE_BUILD_TYPE:-RelWithDebInfo} "$@" >/dev/null
+cmake --build "$BUILD_DIR" --parallel "$(nproc)"

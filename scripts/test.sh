@@ -1,0 +1,8 @@
+#!/usr/bin/env bash
+# Builds relief and runs the whole default test suite (the "slow" label is left
+# out; run it with: ctest --test-dir build -L slow).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+scripts/build.sh
+BUILD_DIR=${RELIEF_BUILD_DIR:-build}
+ctest --test-dir "$BUILD_DIR" --output-on-failure --parallel "$(nproc)" -LE slow
