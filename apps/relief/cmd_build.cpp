@@ -34,6 +34,7 @@ options:
                        as gdalwarp -et; 0 transforms every sample exactly)
   --overwrite          replace an existing store
   -q, --quiet          no progress bar
+  --timings            print the wall time of each build phase
 )";
 
 Result<int> log2_height_from(const std::string& text) {
@@ -57,7 +58,8 @@ int run_build(const std::vector<std::string>& argv) {
                           {{"--output", "-o"}, {"--kind"}, {"--max-level"}, {"--min-level"},
                            {"--codec"}, {"--max-error"}, {"--quality"}, {"--tile-size"},
                            {"--border"}, {"--memory"}, {"--threads"}, {"--src-crs"}, {"--warp-error"},
-                           {"--overwrite", "", false}, {"--quiet", "-q", false}},
+                           {"--overwrite", "", false}, {"--quiet", "-q", false},
+                           {"--timings", "", false}},
                           "build");
   if (!args) return report_error(args.error().message);
   ingest::BuildOptions o;
@@ -118,6 +120,11 @@ int run_build(const std::vector<std::string>& argv) {
               o.output.c_str(), std::string(tiles::to_string(m.kind)).c_str(), m.min_level,
               m.max_level, static_cast<unsigned long long>(report->tiles_written),
               static_cast<unsigned long long>(report->tiles_resumed), report->seconds);
+  if (args->has("--timings")) {
+    for (const auto& [phase, seconds] : report->phase_seconds) {
+      std::printf("  %-16s %8.3f s\n", phase.c_str(), seconds);
+    }
+  }
   return 0;
 }
 

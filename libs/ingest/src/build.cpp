@@ -163,9 +163,16 @@ class Builder {
 
   Result<BuildReport> run() {
     const auto start = std::chrono::steady_clock::now();
-    RELIEF_CHECK(warp_finest());
-    for (int level = max_level_ - 1; level >= min_level_; --level) RELIEF_CHECK(build_parents(level));
     BuildReport report;
+    auto lap = [&, last = start](const char* phase) mutable {
+      const auto now = std::chrono::steady_clock::now();
+      report.phase_seconds.emplace_back(phase, std::chrono::duration<double>(now - last).count());
+      last = now;
+    };
+    RELIEF_CHECK(warp_finest());
+    lap("warp");
+    for (int level = max_level_ - 1; level >= min_level_; --level) RELIEF_CHECK(build_parents(level));
+    lap("pyramid");
     std::vector<tiles::LevelIndex> indices;
     for (int level = min_level_; level <= max_level_; ++level) {
       LevelResult r = RELIEF_TRY(write_level(level));
@@ -173,6 +180,7 @@ class Builder {
       report.tiles_resumed += r.resumed;
       indices.push_back(std::move(r.index));
     }
+    lap("tiles");
     if (indices.back().size() == 0) {
       return fail(fmt::format("{}: the inputs hold no valid samples (nodata everywhere)",
                               o_.inputs.front()));
@@ -182,6 +190,7 @@ class Builder {
     RELIEF_CHECK(tiles::write_manifest(o_.output, report.manifest));
     std::error_code ec;
     fs::remove_all(o_.output / kBuildDir, ec);  // scratch only; the store is complete
+    lap("index+manifest");
     report.seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return report;

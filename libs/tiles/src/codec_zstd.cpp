@@ -1,8 +1,12 @@
-// Lossless codec: a horizontal difference predictor on the raw bit patterns
-// (exact for floats, NaN included), then the bytes of each sample split into
-// planes so zstd sees long runs of similar high bytes.
+// Lossless codec: a predictor, then zstd.
+//  - Float32: the floating-point predictor of TIFF (PREDICTOR=3): each row's
+//    samples are split into byte planes, most significant byte first, and each
+//    byte is replaced by its difference from the previous byte of the row.
+//    Exact for every bit pattern, NaN included.
+//  - UInt8 RGBA: channels are split into planes, each row differenced.
 #include <zstd.h>
 
+#include <cstdlib>
 #include <cstring>
 
 #include <fmt/format.h>
@@ -12,54 +16,73 @@
 namespace relief::tiles::detail {
 namespace {
 
-// Number of interleaved channels and bytes per channel of a raster's samples.
-struct Shape {
-  size_t channels, bytes_per_sample, width, height;
-  size_t total() const { return channels * bytes_per_sample * width * height; }
-};
-
-Shape shape_of(SampleType t, int bands, int w, int h) {
-  return {static_cast<size_t>(bands), sample_size(t), static_cast<size_t>(w),
-          static_cast<size_t>(h)};
+void forward_float(const Raster& r, std::vector<uint8_t>& out) {
+  const size_t w = static_cast<size_t>(r.width()), h = static_cast<size_t>(r.height());
+  const auto* in = reinterpret_cast<const uint8_t*>(r.bytes().data());
+  out.resize(w * h * 4);
+  for (size_t j = 0; j < h; ++j) {
+    const uint8_t* row = in + j * w * 4;
+    uint8_t* o = out.data() + j * w * 4;
+    for (size_t i = 0; i < w; ++i) {
+      for (size_t b = 0; b < 4; ++b) o[b * w + i] = row[i * 4 + (3 - b)];
+    }
+    for (size_t k = w * 4 - 1; k > 0; --k) o[k] = static_cast<uint8_t>(o[k] - o[k - 1]);
+  }
 }
 
-// Predicts each sample from its left neighbour in the same channel (as unsigned
-// integers with wrap-around) and writes byte plane k of all residuals together.
-void forward(const std::byte* in, std::byte* out, const Shape& s) {
-  const size_t n = s.width * s.height * s.channels;
-  for (size_t idx = 0; idx < n; ++idx) {
-    const size_t col = (idx / s.channels) % s.width;
-    uint32_t v = 0, prev = 0;
-    std::memcpy(&v, in + idx * s.bytes_per_sample, s.bytes_per_sample);
-    if (col > 0) std::memcpy(&prev, in + (idx - s.channels) * s.bytes_per_sample, s.bytes_per_sample);
-    const uint32_t residual = v - prev;
-    for (size_t b = 0; b < s.bytes_per_sample; ++b) {
-      out[b * n + idx] = static_cast<std::byte>((residual >> (8 * b)) & 0xFF);
+void inverse_float(const uint8_t* in, Raster& r) {
+  const size_t w = static_cast<size_t>(r.width()), h = static_cast<size_t>(r.height());
+  auto* out = reinterpret_cast<uint8_t*>(r.bytes().data());
+  std::vector<uint8_t> row(w * 4);
+  for (size_t j = 0; j < h; ++j) {
+    const uint8_t* src = in + j * w * 4;
+    uint8_t acc = 0;
+    for (size_t k = 0; k < w * 4; ++k) row[k] = acc = static_cast<uint8_t>(acc + src[k]);
+    uint8_t* o = out + j * w * 4;
+    for (size_t i = 0; i < w; ++i) {
+      for (size_t b = 0; b < 4; ++b) o[i * 4 + (3 - b)] = row[b * w + i];
     }
   }
 }
 
-void inverse(const std::byte* in, std::byte* out, const Shape& s) {
-  const size_t n = s.width * s.height * s.channels;
-  const uint32_t mask = s.bytes_per_sample == 4 ? 0xFFFFFFFFu : (1u << (8 * s.bytes_per_sample)) - 1;
-  for (size_t idx = 0; idx < n; ++idx) {
-    const size_t col = (idx / s.channels) % s.width;
-    uint32_t residual = 0, prev = 0;
-    for (size_t b = 0; b < s.bytes_per_sample; ++b) {
-      residual |= static_cast<uint32_t>(in[b * n + idx]) << (8 * b);
+void forward_rgba(const Raster& r, std::vector<uint8_t>& out) {
+  const size_t w = static_cast<size_t>(r.width()), h = static_cast<size_t>(r.height());
+  const uint8_t* in = r.u8().data();
+  out.resize(w * h * 4);
+  for (size_t c = 0; c < 4; ++c) {
+    uint8_t* plane = out.data() + c * w * h;
+    for (size_t j = 0; j < h; ++j) {
+      uint8_t prev = 0;
+      for (size_t i = 0; i < w; ++i) {
+        const uint8_t v = in[(j * w + i) * 4 + c];
+        plane[j * w + i] = static_cast<uint8_t>(v - prev);
+        prev = v;
+      }
     }
-    if (col > 0) std::memcpy(&prev, out + (idx - s.channels) * s.bytes_per_sample, s.bytes_per_sample);
-    const uint32_t v = (residual + prev) & mask;
-    std::memcpy(out + idx * s.bytes_per_sample, &v, s.bytes_per_sample);
+  }
+}
+
+void inverse_rgba(const uint8_t* in, Raster& r) {
+  const size_t w = static_cast<size_t>(r.width()), h = static_cast<size_t>(r.height());
+  uint8_t* out = r.u8().data();
+  for (size_t c = 0; c < 4; ++c) {
+    const uint8_t* plane = in + c * w * h;
+    for (size_t j = 0; j < h; ++j) {
+      uint8_t acc = 0;
+      for (size_t i = 0; i < w; ++i) {
+        acc = static_cast<uint8_t>(acc + plane[j * w + i]);
+        out[(j * w + i) * 4 + c] = acc;
+      }
+    }
   }
 }
 
 }  // namespace
 
 Result<std::vector<std::byte>> encode_zstd(const Raster& r, int level) {
-  const Shape s = shape_of(r.type(), r.bands(), r.width(), r.height());
-  std::vector<std::byte> planes(s.total());
-  forward(r.bytes().data(), planes.data(), s);
+  std::vector<uint8_t> planes;
+  if (r.type() == SampleType::Float32) forward_float(r, planes);
+  else forward_rgba(r, planes);
   std::vector<std::byte> out(ZSTD_compressBound(planes.size()));
   const size_t n = ZSTD_compress(out.data(), out.size(), planes.data(), planes.size(), level);
   if (ZSTD_isError(n)) return fail(fmt::format("zstd: {}", ZSTD_getErrorName(n)));
@@ -68,19 +91,19 @@ Result<std::vector<std::byte>> encode_zstd(const Raster& r, int level) {
 }
 
 Result<Raster> decode_zstd(std::span<const std::byte> p, SampleType t, int bands, int w, int h) {
-  const Shape s = shape_of(t, bands, w, h);
+  Raster r(t, bands, w, h);
   const unsigned long long size = ZSTD_getFrameContentSize(p.data(), p.size());
-  if (size == ZSTD_CONTENTSIZE_ERROR || size == ZSTD_CONTENTSIZE_UNKNOWN || size != s.total()) {
+  if (size == ZSTD_CONTENTSIZE_ERROR || size == ZSTD_CONTENTSIZE_UNKNOWN || size != r.byte_size()) {
     return fail("zstd payload is corrupt or has the wrong size");
   }
-  std::vector<std::byte> planes(s.total());
+  std::vector<uint8_t> planes(r.byte_size());
   const size_t n = ZSTD_decompress(planes.data(), planes.size(), p.data(), p.size());
   if (ZSTD_isError(n) || n != planes.size()) {
     return fail(fmt::format("zstd payload is corrupt: {}",
                             ZSTD_isError(n) ? ZSTD_getErrorName(n) : "short"));
   }
-  Raster r(t, bands, w, h);
-  inverse(planes.data(), r.bytes().data(), s);
+  if (t == SampleType::Float32) inverse_float(planes.data(), r);
+  else inverse_rgba(planes.data(), r);
   return r;
 }
 

@@ -45,6 +45,7 @@ struct BuildReport {
   uint64_t tiles_written = 0;
   uint64_t tiles_resumed = 0;  // already present from an interrupted run
   double seconds = 0;
+  std::vector<std::pair<std::string, double>> phase_seconds;  // wall time per phase
 };
 
 Result<BuildReport> build_store(const BuildOptions& options, Executor& executor,
