@@ -249,7 +249,7 @@ class Builder {
         }
         auto core = warper->warp(keys[i]);
         if (!core) error.set(core.error());
-        else if (core->stats(0, 0, core->width(), core->height()).valid_count > 0) {
+        else if (core->any_valid()) {
           if (auto st = cores_.write(keys[i], *core); !st) error.set(st.error());
         }
         std::lock_guard lock(pool_mutex);

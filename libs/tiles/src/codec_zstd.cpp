@@ -19,7 +19,7 @@ namespace {
 void forward_float(const Raster& r, std::vector<uint8_t>& out) {
   const size_t w = static_cast<size_t>(r.width()), h = static_cast<size_t>(r.height());
   const auto* in = reinterpret_cast<const uint8_t*>(r.bytes().data());
-  out.resize(w * h * 4);
+  out.resize(w * h * 4);  // no shrink: the buffer is reused across tiles
   for (size_t j = 0; j < h; ++j) {
     const uint8_t* row = in + j * w * 4;
     uint8_t* o = out.data() + j * w * 4;
@@ -77,14 +77,31 @@ void inverse_rgba(const uint8_t* in, Raster& r) {
   }
 }
 
+// zstd contexts are large (about 1 MiB at level 3) and costly to set up, so
+// each thread keeps one of each for its lifetime, as does the plane buffer.
+struct ThreadState {
+  ZSTD_CCtx* cctx = ZSTD_createCCtx();
+  ZSTD_DCtx* dctx = ZSTD_createDCtx();
+  std::vector<uint8_t> planes;
+  ~ThreadState() {
+    ZSTD_freeCCtx(cctx);
+    ZSTD_freeDCtx(dctx);
+  }
+};
+ThreadState& thread_state() {
+  thread_local ThreadState state;
+  return state;
+}
+
 }  // namespace
 
 Result<std::vector<std::byte>> encode_zstd(const Raster& r, int level) {
-  std::vector<uint8_t> planes;
+  ThreadState& ts = thread_state();
+  std::vector<uint8_t>& planes = ts.planes;
   if (r.type() == SampleType::Float32) forward_float(r, planes);
   else forward_rgba(r, planes);
   std::vector<std::byte> out(ZSTD_compressBound(planes.size()));
-  const size_t n = ZSTD_compress(out.data(), out.size(), planes.data(), planes.size(), level);
+  const size_t n = ZSTD_compressCCtx(ts.cctx, out.data(), out.size(), planes.data(), planes.size(), level);
   if (ZSTD_isError(n)) return fail(fmt::format("zstd: {}", ZSTD_getErrorName(n)));
   out.resize(n);
   return out;
@@ -96,8 +113,10 @@ Result<Raster> decode_zstd(std::span<const std::byte> p, SampleType t, int bands
   if (size == ZSTD_CONTENTSIZE_ERROR || size == ZSTD_CONTENTSIZE_UNKNOWN || size != r.byte_size()) {
     return fail("zstd payload is corrupt or has the wrong size");
   }
-  std::vector<uint8_t> planes(r.byte_size());
-  const size_t n = ZSTD_decompress(planes.data(), planes.size(), p.data(), p.size());
+  ThreadState& ts = thread_state();
+  std::vector<uint8_t>& planes = ts.planes;
+  planes.resize(r.byte_size());
+  const size_t n = ZSTD_decompressDCtx(ts.dctx, planes.data(), planes.size(), p.data(), p.size());
   if (ZSTD_isError(n) || n != planes.size()) {
     return fail(fmt::format("zstd payload is corrupt: {}",
                             ZSTD_isError(n) ? ZSTD_getErrorName(n) : "short"));

@@ -69,32 +69,64 @@ SampleStats Raster::stats(int x0, int y0, int w, int h) const {
   double sum = 0, sum_sq = 0;
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;
   uint64_t n = 0;
-  auto add = [&](double v) {
-    sum += v;
-    sum_sq += v * v;
-    lo = std::min(lo, v);
-    hi = std::max(hi, v);
-    ++n;
-  };
-  for (int j = y0; j < y0 + h; ++j) {
-    for (int i = x0; i < x0 + w; ++i) {
-      if (!valid(i, j)) continue;
-      const size_t p = static_cast<size_t>(j) * static_cast<size_t>(width_) + static_cast<size_t>(i);
-      if (type_ == SampleType::Float32) {
-        add(f32()[p]);
-      } else {
-        for (int b = 0; b < 3; ++b) add(u8()[p * 4 + static_cast<size_t>(b)]);
+  const size_t stride = static_cast<size_t>(width_);
+  if (type_ == SampleType::Float32) {
+    const float* v = reinterpret_cast<const float*>(bytes_.data());
+    for (int j = y0; j < y0 + h; ++j) {
+      const float* row = v + static_cast<size_t>(j) * stride;
+      double row_sum = 0, row_sq = 0;
+      for (int i = x0; i < x0 + w; ++i) {
+        const float x = row[i];
+        if (std::isnan(x)) continue;
+        row_sum += x;
+        row_sq += static_cast<double>(x) * x;
+        lo = std::min(lo, static_cast<double>(x));
+        hi = std::max(hi, static_cast<double>(x));
+        ++n;
       }
-      if (type_ == SampleType::UInt8) ++s.valid_count;
+      sum += row_sum;
+      sum_sq += row_sq;
+    }
+    s.valid_count = n;
+  } else {
+    const uint8_t* p = reinterpret_cast<const uint8_t*>(bytes_.data());
+    for (int j = y0; j < y0 + h; ++j) {
+      const uint8_t* row = p + static_cast<size_t>(j) * stride * 4;
+      for (int i = x0; i < x0 + w; ++i) {
+        const uint8_t* px = row + static_cast<size_t>(i) * 4;
+        if (px[3] == 0) continue;
+        ++s.valid_count;
+        for (int b = 0; b < 3; ++b) {
+          const double x = px[b];
+          sum += x;
+          sum_sq += x * x;
+          lo = std::min(lo, x);
+          hi = std::max(hi, x);
+        }
+        n += 3;
+      }
     }
   }
-  if (type_ == SampleType::Float32) s.valid_count = n;
   if (n == 0) return s;
   s.min = lo;
   s.max = hi;
   s.mean = sum / static_cast<double>(n);
   s.stddev = std::sqrt(std::max(0.0, sum_sq / static_cast<double>(n) - s.mean * s.mean));
   return s;
+}
+
+bool Raster::any_valid() const {
+  if (type_ == SampleType::Float32) {
+    for (float x : f32()) {
+      if (!std::isnan(x)) return true;
+    }
+    return false;
+  }
+  const auto p = u8();
+  for (size_t i = 3; i < p.size(); i += 4) {
+    if (p[i] != 0) return true;
+  }
+  return false;
 }
 
 void Raster::copy_from(const Raster& src, int sx, int sy, int dx, int dy, int w, int h) {

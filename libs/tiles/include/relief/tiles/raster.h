@@ -47,6 +47,7 @@ class Raster {
   std::span<const uint8_t> u8() const;
 
   bool valid(int i, int j) const;
+  bool any_valid() const;
   // Statistics of the valid samples in the window [x0, x0+w) x [y0, y0+h).
   // For imagery they are over all colour channels of valid pixels.
   SampleStats stats(int x0, int y0, int w, int h) const;
