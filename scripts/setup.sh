@@ -2,7 +2,7 @@
 # Installs every build, test and benchmark dependency from Debian packages.
 set -euo pipefail
 packages=(
-  build-essential cmake ninja-build ccache pkg-config git zip
+  build-essential cmake ninja-build ccache pkg-config git zip clang-format time python3
   libgdal-dev gdal-bin
   libzstd-dev liblerc-dev libpng-dev libturbojpeg0-dev libwebp-dev
   nlohmann-json3-dev libfmt-dev libgtest-dev

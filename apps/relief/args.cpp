@@ -25,9 +25,12 @@ Result<Args> Args::parse(const std::vector<std::string>& argv, const std::vector
     for (const auto& s : specs) {
       if (arg == s.name || (!s.alias.empty() && arg == s.alias)) spec = &s;
     }
-    if (!spec) return fail(fmt::format("{}: unknown option '{}' (see relief {} --help)", command, arg, command));
+    if (!spec)
+      return fail(
+          fmt::format("{}: unknown option '{}' (see relief {} --help)", command, arg, command));
     if (!spec->takes_value) {
-      if (inline_value) return fail(fmt::format("{}: option {} takes no value", command, spec->name));
+      if (inline_value)
+        return fail(fmt::format("{}: option {} takes no value", command, spec->name));
       args.values_[spec->name] = "";
       continue;
     }
@@ -56,7 +59,8 @@ Result<std::optional<int>> Args::get_int(const std::string& name, int lo, int hi
   if (ec != std::errc() || p != v->data() + v->size()) {
     return fail(fmt::format("{}: '{}' is not an integer", name, *v));
   }
-  if (value < lo || value > hi) return fail(fmt::format("{}: {} is not in {}..{}", name, value, lo, hi));
+  if (value < lo || value > hi)
+    return fail(fmt::format("{}: {} is not in {}..{}", name, value, lo, hi));
   return std::optional<int>(value);
 }
 

@@ -20,8 +20,8 @@ struct OptionSpec {
 
 class Args {
  public:
-  static Result<Args> parse(const std::vector<std::string>& argv, const std::vector<OptionSpec>& specs,
-                            const std::string& command);
+  static Result<Args> parse(const std::vector<std::string>& argv,
+                            const std::vector<OptionSpec>& specs, const std::string& command);
 
   const std::vector<std::string>& positional() const { return positional_; }
   bool has(const std::string& name) const { return values_.count(name) > 0; }

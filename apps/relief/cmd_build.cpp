@@ -10,7 +10,8 @@
 namespace relief::cli {
 
 namespace {
-constexpr const char* kHelp = R"(usage: relief build INPUT... -o STORE --kind elevation|imagery|sar [options]
+constexpr const char* kHelp =
+    R"(usage: relief build INPUT... -o STORE --kind elevation|imagery|sar [options]
 
 Builds a multi-resolution tile pyramid on the WGS84 geographic quadtree from any
 rasters GDAL reads, in any projection. Several inputs are mosaicked into one
@@ -50,21 +51,30 @@ Result<int> log2_height_from(const std::string& text) {
 }  // namespace
 
 int run_build(const std::vector<std::string>& argv) {
-  if (wants_help(argv)) {
-    std::fputs(kHelp, stdout);
-    return 0;
-  }
+  if (wants_help(argv)) return print_help(kHelp);
   auto args = Args::parse(argv,
-                          {{"--output", "-o"}, {"--kind"}, {"--max-level"}, {"--min-level"},
-                           {"--codec"}, {"--max-error"}, {"--quality"}, {"--tile-size"},
-                           {"--border"}, {"--memory"}, {"--threads"}, {"--src-crs"}, {"--warp-error"},
-                           {"--overwrite", "", false}, {"--quiet", "-q", false},
+                          {{"--output", "-o"},
+                           {"--kind"},
+                           {"--max-level"},
+                           {"--min-level"},
+                           {"--codec"},
+                           {"--max-error"},
+                           {"--quality"},
+                           {"--tile-size"},
+                           {"--border"},
+                           {"--memory"},
+                           {"--threads"},
+                           {"--src-crs"},
+                           {"--warp-error"},
+                           {"--overwrite", "", false},
+                           {"--quiet", "-q", false},
                            {"--timings", "", false}},
                           "build");
   if (!args) return report_error(args.error().message);
   ingest::BuildOptions o;
   o.inputs = args->positional();
-  if (o.inputs.empty()) return report_error("build: no input files given (see relief build --help)");
+  if (o.inputs.empty())
+    return report_error("build: no input files given (see relief build --help)");
   if (!args->get("--output")) return report_error("build: -o STORE is required");
   o.output = *args->get("--output");
   if (!args->get("--kind")) return report_error("build: --kind elevation|imagery|sar is required");
@@ -112,7 +122,8 @@ int run_build(const std::vector<std::string>& argv) {
   o.overwrite = args->has("--overwrite");
 
   ThreadExecutor executor(threads->value_or(0));
-  auto progress = args->has("--quiet") ? std::make_unique<NullProgress>() : make_progress_for_stderr();
+  auto progress =
+      args->has("--quiet") ? std::make_unique<NullProgress>() : make_progress_for_stderr();
   auto report = ingest::build_store(o, executor, *progress);
   if (!report) return report_error(report.error().message);
   const auto& m = report->manifest;

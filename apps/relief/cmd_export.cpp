@@ -31,12 +31,9 @@ Result<geo::GeoBox> parse_bbox(const std::string& text) {
 }  // namespace
 
 int run_export(const std::vector<std::string>& argv) {
-  if (wants_help(argv)) {
-    std::fputs(kHelp, stdout);
-    return 0;
-  }
-  auto args = Args::parse(argv, {{"--level"}, {"--bbox"}, {"--output", "-o"}, {"--quiet", "-q", false}},
-                          "export");
+  if (wants_help(argv)) return print_help(kHelp);
+  auto args = Args::parse(
+      argv, {{"--level"}, {"--bbox"}, {"--output", "-o"}, {"--quiet", "-q", false}}, "export");
   if (!args) return report_error(args.error().message);
   if (args->positional().size() != 1) return report_error("export: expected exactly one STORE");
   ingest::ExportOptions o;
@@ -52,7 +49,8 @@ int run_export(const std::vector<std::string>& argv) {
   }
   if (!args->get("--output")) return report_error("export: -o OUT.tif is required");
   o.output = *args->get("--output");
-  auto progress = args->has("--quiet") ? std::make_unique<NullProgress>() : make_progress_for_stderr();
+  auto progress =
+      args->has("--quiet") ? std::make_unique<NullProgress>() : make_progress_for_stderr();
   auto report = ingest::export_geotiff(o, *progress);
   if (!report) return report_error(report.error().message);
   std::printf("wrote %s: %d x %d samples from %d tiles\n", o.output.c_str(), report->width,

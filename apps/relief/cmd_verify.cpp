@@ -15,17 +15,15 @@ payload). Prints one line per bad file and exits non-zero if any is found.
 }  // namespace
 
 int run_verify(const std::vector<std::string>& argv) {
-  if (wants_help(argv)) {
-    std::fputs(kHelp, stdout);
-    return 0;
-  }
+  if (wants_help(argv)) return print_help(kHelp);
   auto args = Args::parse(argv, {{"--threads"}, {"--quiet", "-q", false}}, "verify");
   if (!args) return report_error(args.error().message);
   if (args->positional().size() != 1) return report_error("verify: expected exactly one STORE");
   auto threads = args->get_int("--threads", 1, 1024);
   if (!threads) return report_error(threads.error().message);
   ThreadExecutor executor(threads->value_or(0));
-  auto progress = args->has("--quiet") ? std::make_unique<NullProgress>() : make_progress_for_stderr();
+  auto progress =
+      args->has("--quiet") ? std::make_unique<NullProgress>() : make_progress_for_stderr();
   const auto report = tiles::verify_store(args->positional()[0], executor, *progress);
   for (const auto& p : report.problems) std::fprintf(stderr, "relief: %s\n", p.c_str());
   if (!report.ok()) {

@@ -13,5 +13,7 @@ int run_export(const std::vector<std::string>& args);
 // Prints "relief: <message>" on stderr and returns 1.
 int report_error(const std::string& message);
 bool wants_help(const std::vector<std::string>& args);
+// Prints a command's help on stdout; returns exit code 0.
+int print_help(const char* text);
 
 }  // namespace relief::cli

@@ -38,6 +38,11 @@ bool wants_help(const std::vector<std::string>& args) {
   return false;
 }
 
+int print_help(const char* text) {
+  std::fputs(text, stdout);
+  return 0;
+}
+
 }  // namespace relief::cli
 
 int main(int argc, char** argv) {

@@ -16,7 +16,9 @@ namespace fs = std::filesystem;
 
 const std::string kPyrenees = data("srtm/N42E001.hgt.zip");
 
-int line_count(const std::string& s) { return static_cast<int>(std::count(s.begin(), s.end(), '\n')); }
+int line_count(const std::string& s) {
+  return static_cast<int>(std::count(s.begin(), s.end(), '\n'));
+}
 
 // A failed run: non-zero exit, exactly one line on stderr, mentioning `needle`.
 void expect_one_line_error(const RunResult& r, const std::string& needle) {
@@ -42,16 +44,33 @@ TEST(Cli, HelpListsCommands) {
 TEST(Cli, BadArgumentsNameTheArgument) {
   ScratchDir dir("cli_args");
   const std::string out = (dir / "s").string();
-  expect_one_line_error(run_relief({"build", kPyrenees, "-o", out, "--kind", "elevation", "--bogus"}), "--bogus");
+  expect_one_line_error(
+      run_relief({"build", kPyrenees, "-o", out, "--kind", "elevation", "--bogus"}), "--bogus");
   expect_one_line_error(run_relief({"build", kPyrenees, "-o", out, "--kind", "lava"}), "lava");
-  expect_one_line_error(run_relief({"build", kPyrenees, "-o", out, "--kind", "elevation", "--max-level", "abc"}), "--max-level");
-  expect_one_line_error(run_relief({"build", kPyrenees, "-o", out, "--kind", "elevation", "--max-level", "99"}), "--max-level");
-  expect_one_line_error(run_relief({"build", kPyrenees, "-o", out, "--kind", "elevation", "--memory", "1XB"}), "--memory");
-  expect_one_line_error(run_relief({"build", kPyrenees, "-o", out, "--kind", "elevation", "--memory", "1MiB"}), "--memory");
-  expect_one_line_error(run_relief({"build", kPyrenees, "-o", out, "--kind", "elevation", "--codec", "png"}), "--codec");
-  expect_one_line_error(run_relief({"build", kPyrenees, "-o", out, "--kind", "elevation", "--max-error", "-1"}), "--max-error");
-  expect_one_line_error(run_relief({"build", kPyrenees, "-o", out, "--kind", "elevation", "--tile-size", "300x200"}), "--tile-size");
-  expect_one_line_error(run_relief({"build", kPyrenees, "-o", out, "--kind", "elevation", "--border", "-2"}), "--border");
+  expect_one_line_error(
+      run_relief({"build", kPyrenees, "-o", out, "--kind", "elevation", "--max-level", "abc"}),
+      "--max-level");
+  expect_one_line_error(
+      run_relief({"build", kPyrenees, "-o", out, "--kind", "elevation", "--max-level", "99"}),
+      "--max-level");
+  expect_one_line_error(
+      run_relief({"build", kPyrenees, "-o", out, "--kind", "elevation", "--memory", "1XB"}),
+      "--memory");
+  expect_one_line_error(
+      run_relief({"build", kPyrenees, "-o", out, "--kind", "elevation", "--memory", "1MiB"}),
+      "--memory");
+  expect_one_line_error(
+      run_relief({"build", kPyrenees, "-o", out, "--kind", "elevation", "--codec", "png"}),
+      "--codec");
+  expect_one_line_error(
+      run_relief({"build", kPyrenees, "-o", out, "--kind", "elevation", "--max-error", "-1"}),
+      "--max-error");
+  expect_one_line_error(
+      run_relief({"build", kPyrenees, "-o", out, "--kind", "elevation", "--tile-size", "300x200"}),
+      "--tile-size");
+  expect_one_line_error(
+      run_relief({"build", kPyrenees, "-o", out, "--kind", "elevation", "--border", "-2"}),
+      "--border");
   expect_one_line_error(run_relief({"build", kPyrenees, "-o", out}), "--kind");
   expect_one_line_error(run_relief({"build", kPyrenees, "--kind", "elevation"}), "-o");
   expect_one_line_error(run_relief({"build", "-o", out, "--kind", "elevation"}), "no input");
@@ -82,8 +101,10 @@ TEST(Cli, BadInputsNameTheFile) {
 
   // A PNG without any georeferencing.
   const std::string png = (dir / "plain.png").string();
-  ASSERT_EQ(std::system(("gdal_translate -q -of PNG -outsize 16 16 " + data("imagery/RGB.byte.tif") +
-                         " " + png + " 2>/dev/null").c_str()), 0);
+  ASSERT_EQ(std::system(("gdal_translate -q -of PNG -outsize 16 16 " +
+                         data("imagery/RGB.byte.tif") + " " + png + " 2>/dev/null")
+                            .c_str()),
+            0);
   fs::remove(png + ".aux.xml");
   expect_one_line_error(build({png}, "imagery"), "no georeferencing");
 
@@ -99,35 +120,42 @@ TEST(Cli, BadInputsNameTheFile) {
 
   // Complex samples (an SLC-like product).
   const std::string complex = (dir / "slc.tif").string();
-  ASSERT_EQ(std::system(("gdal_translate -q -ot CInt16 -outsize 32 32 " + kPyrenees + " " + complex +
-                         " 2>/dev/null").c_str()), 0);
+  ASSERT_EQ(std::system(("gdal_translate -q -ot CInt16 -outsize 32 32 " + kPyrenees + " " +
+                         complex + " 2>/dev/null")
+                            .c_str()),
+            0);
   expect_one_line_error(build({complex}, "sar"), "unsupported data type CInt16");
 
   // Inputs that conflict with the kind or with each other.
   expect_one_line_error(build({data("imagery/RGB.byte.tif")}, "elevation"), "3 bands");
   expect_one_line_error(build({kPyrenees}, "imagery"), "unsupported data type Int16");
   const std::string grey = (dir / "grey.tif").string();
-  ASSERT_EQ(std::system(("gdal_translate -q -b 1 " + data("imagery/RGB.byte.tif") + " " + grey).c_str()), 0);
+  ASSERT_EQ(
+      std::system(("gdal_translate -q -b 1 " + data("imagery/RGB.byte.tif") + " " + grey).c_str()),
+      0);
   expect_one_line_error(build({grey, data("imagery/RGB.byte.tif")}, "imagery"), "colour bands");
   EXPECT_FALSE(fs::exists(out));
 }
 
 TEST(Cli, UnwritableAndExistingOutputs) {
   ScratchDir dir("cli_outputs");
-  expect_one_line_error(run_relief({"build", kPyrenees, "-o", "/proc/relief/store", "--kind", "elevation"}),
-                        "/proc/relief/store");
+  expect_one_line_error(
+      run_relief({"build", kPyrenees, "-o", "/proc/relief/store", "--kind", "elevation"}),
+      "/proc/relief/store");
   const std::string file = (dir / "afile").string();
   std::ofstream(file) << "x";
-  expect_one_line_error(run_relief({"build", kPyrenees, "-o", file, "--kind", "elevation"}), "not a directory");
+  expect_one_line_error(run_relief({"build", kPyrenees, "-o", file, "--kind", "elevation"}),
+                        "not a directory");
   fs::create_directories(dir / "other");
   std::ofstream(dir / "other" / "precious.txt") << "keep me";
   expect_one_line_error(
-      run_relief({"build", kPyrenees, "-o", (dir / "other").string(), "--kind", "elevation"}), "not a relief store");
+      run_relief({"build", kPyrenees, "-o", (dir / "other").string(), "--kind", "elevation"}),
+      "not a relief store");
   EXPECT_TRUE(fs::exists(dir / "other" / "precious.txt"));
 
   const std::string store = (dir / "store").string();
-  const std::vector<std::string> args = {"build", kPyrenees, "-o", store, "--kind", "elevation",
-                                         "--min-level", "8", "-q"};
+  const std::vector<std::string> args = {"build",     kPyrenees,     "-o", store, "--kind",
+                                         "elevation", "--min-level", "8",  "-q"};
   ASSERT_EQ(run_relief(args).exit_code, 0);
   expect_one_line_error(run_relief(args), "--overwrite");
   auto again = args;
@@ -135,11 +163,14 @@ TEST(Cli, UnwritableAndExistingOutputs) {
   EXPECT_EQ(run_relief(again).exit_code, 0);
   std::vector<std::string> exported = {"export", store, "--level", "9", "-o", "/proc/relief/x.tif"};
   expect_one_line_error(run_relief(exported), "/proc/relief/x.tif");
-  expect_one_line_error(run_relief({"export", store, "--level", "3", "-o", (dir / "x.tif").string()}), "--level");
+  expect_one_line_error(
+      run_relief({"export", store, "--level", "3", "-o", (dir / "x.tif").string()}), "--level");
   expect_one_line_error(run_relief({"export", store, "--level", "9", "--bbox", "1,2,3", "-o",
-                                    (dir / "x.tif").string()}), "--bbox");
+                                    (dir / "x.tif").string()}),
+                        "--bbox");
   expect_one_line_error(run_relief({"export", store, "--level", "9", "--bbox", "5,42,1,43", "-o",
-                                    (dir / "x.tif").string()}), "--bbox");
+                                    (dir / "x.tif").string()}),
+                        "--bbox");
   EXPECT_FALSE(fs::exists(dir / "x.tif"));
   expect_one_line_error(run_relief({"info", (dir / "nothing").string()}), "nothing");
 }
@@ -150,7 +181,8 @@ TEST(Cli, UnwritableAndExistingOutputs) {
 TEST(Cli, FullDiskFailsCleanlyAndResumes) {
   ScratchDir dir("cli_full");
   const std::string store = (dir / "store").string();
-  const std::vector<std::string> args = {"build", kPyrenees, "-o", store, "--kind", "elevation", "-q"};
+  const std::vector<std::string> args = {"build",  kPyrenees,   "-o", store,
+                                         "--kind", "elevation", "-q"};
   auto r = run_relief(args, "ulimit -f 150;");
   expect_one_line_error(r, "File too large");
   EXPECT_TRUE(temporary_files(store).empty());
@@ -166,7 +198,8 @@ TEST(Cli, FullDiskFailsCleanlyAndResumes) {
 TEST(Cli, InfoReportsLevelsAndCompression) {
   ScratchDir dir("cli_info");
   const std::string store = (dir / "store").string();
-  ASSERT_EQ(run_relief({"build", kPyrenees, "-o", store, "--kind", "elevation", "-q"}).exit_code, 0);
+  ASSERT_EQ(run_relief({"build", kPyrenees, "-o", store, "--kind", "elevation", "-q"}).exit_code,
+            0);
   auto text = run_relief({"info", store});
   EXPECT_EQ(text.exit_code, 0);
   EXPECT_NE(text.out.find("compression"), std::string::npos);
@@ -186,8 +219,10 @@ TEST(Cli, InfoReportsLevelsAndCompression) {
 class CorruptStore : public ::testing::Test {
  protected:
   void SetUp() override {
-    ASSERT_EQ(run_relief({"build", kPyrenees, "-o", store_, "--kind", "elevation", "--min-level", "9", "-q"})
-                  .exit_code, 0);
+    ASSERT_EQ(run_relief({"build", kPyrenees, "-o", store_, "--kind", "elevation", "--min-level",
+                          "9", "-q"})
+                  .exit_code,
+              0);
     for (const auto& e : fs::recursive_directory_iterator(store_)) {
       if (e.path().extension() == ".rtile") tiles_.push_back(e.path());
     }
@@ -217,7 +252,8 @@ TEST_F(CorruptStore, VerifyNamesEachBadTile) {
   auto r = run_relief({"verify", store_, "-q"});
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_EQ(line_count(r.err), 4) << r.err;
-  EXPECT_NE(r.err.find(tiles_[0].string() + ": tile payload checksum mismatch"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find(tiles_[0].string() + ": tile payload checksum mismatch"), std::string::npos)
+      << r.err;
   EXPECT_NE(r.err.find(tiles_[1].string() + ": truncated tile"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find(tiles_[2].string() + ": tile"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("missing"), std::string::npos) << r.err;

@@ -17,8 +17,18 @@ namespace {
 namespace fs = std::filesystem;
 
 std::vector<std::string> build_args(const std::string& out) {
-  return {"build", data("srtm/N55W004.hgt.zip"), data("srtm/N55W003.hgt.zip"), "-o", out,
-          "--kind", "elevation", "--max-level", "11", "--threads", "1", "-q"};
+  return {"build",
+          data("srtm/N55W004.hgt.zip"),
+          data("srtm/N55W003.hgt.zip"),
+          "-o",
+          out,
+          "--kind",
+          "elevation",
+          "--max-level",
+          "11",
+          "--threads",
+          "1",
+          "-q"};
 }
 
 std::map<std::string, std::vector<std::byte>> store_files(const fs::path& root) {
@@ -48,8 +58,8 @@ bool kill_when(int pid, const std::function<bool()>& ready) {
 size_t count_files(const fs::path& dir) {
   std::error_code ec;
   size_t n = 0;
-  for (auto it = fs::recursive_directory_iterator(dir, ec); !ec && it != fs::recursive_directory_iterator();
-       it.increment(ec)) {
+  for (auto it = fs::recursive_directory_iterator(dir, ec);
+       !ec && it != fs::recursive_directory_iterator(); it.increment(ec)) {
     n += it->is_regular_file() ? 1 : 0;
   }
   return n;
@@ -69,7 +79,8 @@ TEST(Resume, KilledBuildsResumeToTheSameStore) {
   };
   const std::vector<KillPoint> points = {
       {"while warping", [&](const fs::path& s) { return count_files(s / cores) >= 5; }},
-      {"while building the pyramid", [](const fs::path& s) { return fs::exists(s / ".build/cores/9"); }},
+      {"while building the pyramid",
+       [](const fs::path& s) { return fs::exists(s / ".build/cores/9"); }},
       {"while writing tiles", [](const fs::path& s) { return count_files(s / "11") >= 20; }},
   };
   for (const auto& point : points) {

@@ -57,7 +57,8 @@ TEST(TileGrid, LocateInvertsSamplePositions) {
   for (int n = 0; n < 2000; ++n) {
     const int level = static_cast<int>(rng() % 16);
     const uint32_t tiles = TileKey::tiles_per_side(level);
-    const TileKey t{level, static_cast<uint32_t>(rng() % tiles), static_cast<uint32_t>(rng() % tiles)};
+    const TileKey t{level, static_cast<uint32_t>(rng() % tiles),
+                    static_cast<uint32_t>(rng() % tiles)};
     const int i = static_cast<int>(rng() % 512), j = static_cast<int>(rng() % 256);
     const SampleIndex s = g.locate(level, g.sample_lon(t, i), g.sample_lat(t, j));
     EXPECT_EQ(s.tile, t);

@@ -88,8 +88,8 @@ void build_vrt(const std::vector<std::string>& inputs, const std::string& path) 
   std::vector<const char*> names;
   for (const auto& in : inputs) names.push_back(in.c_str());
   int usage = 0;
-  GDALDatasetH vrt = GDALBuildVRT(path.c_str(), static_cast<int>(names.size()), nullptr, names.data(),
-                                  nullptr, &usage);
+  GDALDatasetH vrt = GDALBuildVRT(path.c_str(), static_cast<int>(names.size()), nullptr,
+                                  names.data(), nullptr, &usage);
   if (!vrt) throw std::runtime_error("gdalbuildvrt failed");
   GDALClose(vrt);
 }
@@ -107,17 +107,31 @@ Warped gdalwarp_like(const std::vector<std::string>& inputs, const Warped& like,
     std::snprintf(buf, sizeof buf, "%.17g", v);
     return std::string(buf);
   };
-  const std::vector<std::string> args_s = {
-      "-of", "MEM", "-t_srs", "EPSG:4326", "-te", exact(west), exact(south),
-      exact(east), exact(north), "-ts", std::to_string(like.width),
-      std::to_string(like.height), "-r", resampling, "-ot", alpha ? "Byte" : "Float32",
-      "-et", exact(error_threshold)};
+  const std::vector<std::string> args_s = {"-of",
+                                           "MEM",
+                                           "-t_srs",
+                                           "EPSG:4326",
+                                           "-te",
+                                           exact(west),
+                                           exact(south),
+                                           exact(east),
+                                           exact(north),
+                                           "-ts",
+                                           std::to_string(like.width),
+                                           std::to_string(like.height),
+                                           "-r",
+                                           resampling,
+                                           "-ot",
+                                           alpha ? "Byte" : "Float32",
+                                           "-et",
+                                           exact(error_threshold)};
   std::vector<std::string> all = args_s;
   for (const auto& wo : warp_options) {
     all.push_back("-wo");
     all.push_back(wo);
   }
-  if (alpha) all.push_back("-dstalpha");
+  if (alpha)
+    all.push_back("-dstalpha");
   else {
     all.push_back("-dstnodata");
     all.push_back("nan");
@@ -127,7 +141,8 @@ Warped gdalwarp_like(const std::vector<std::string>& inputs, const Warped& like,
   argv.push_back(nullptr);
   GDALWarpAppOptions* opts = GDALWarpAppOptionsNew(argv.data(), nullptr);
   int usage = 0;
-  GDALDatasetH out = GDALWarp("", nullptr, static_cast<int>(srcs.size()), srcs.data(), opts, &usage);
+  GDALDatasetH out =
+      GDALWarp("", nullptr, static_cast<int>(srcs.size()), srcs.data(), opts, &usage);
   GDALWarpAppOptionsFree(opts);
   if (!out) throw std::runtime_error("gdalwarp failed");
   Warped w = read_all(out);
@@ -141,7 +156,8 @@ void write_geotiff(const std::string& path, int width, int height, const double 
                    const std::string& srs) {
   init();
   GDALDataType t = GDALGetDataTypeByName(type.c_str());
-  GDALDatasetH ds = GDALCreate(GDALGetDriverByName("GTiff"), path.c_str(), width, height, 1, t, nullptr);
+  GDALDatasetH ds =
+      GDALCreate(GDALGetDriverByName("GTiff"), path.c_str(), width, height, 1, t, nullptr);
   if (!ds) throw std::runtime_error("cannot create " + path);
   GDALSetGeoTransform(ds, const_cast<double*>(gt));
   if (!srs.empty()) {
@@ -155,7 +171,8 @@ void write_geotiff(const std::string& path, int width, int height, const double 
   }
   if (!GDALDataTypeIsComplex(t)) {
     if (GDALRasterIO(GDALGetRasterBand(ds, 1), GF_Write, 0, 0, width, height,
-                 const_cast<float*>(values.data()), width, height, GDT_Float32, 0, 0) != CE_None) {
+                     const_cast<float*>(values.data()), width, height, GDT_Float32, 0,
+                     0) != CE_None) {
       throw std::runtime_error("cannot write " + path);
     }
   }

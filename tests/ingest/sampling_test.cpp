@@ -47,8 +47,9 @@ TEST(Sampling, LosslessFinestLevelEqualsGdalBilinear) {
   const auto& store = pyrenees_store();
   EXPECT_EQ(store.manifest().max_level, 10);
   std::vector<SourceGrid> sources;
-  for (const auto& in : pyrenees_inputs()) sources.push_back(read_source("/vsizip/" + in + "/" +
-      std::filesystem::path(in).stem().string()));
+  for (const auto& in : pyrenees_inputs())
+    sources.push_back(
+        read_source("/vsizip/" + in + "/" + std::filesystem::path(in).stem().string()));
   const int n = compare_with_bilinear(store, sources, {1.0, 41.0, 2.0, 43.0}, 1e-3, 1);
   EXPECT_GT(n, 1300);
 }
@@ -61,7 +62,8 @@ TEST(Sampling, LercFinestLevelIsWithinMaxError) {
   o.min_level = 8;
   const auto& store = built_store("pyrenees_lerc", o);
   EXPECT_EQ(store.manifest().codec.codec, tiles::Codec::Lerc);
-  std::vector<SourceGrid> sources = {read_source("/vsizip/" + data("srtm/N42E001.hgt.zip") + "/N42E001.hgt")};
+  std::vector<SourceGrid> sources = {
+      read_source("/vsizip/" + data("srtm/N42E001.hgt.zip") + "/N42E001.hgt")};
   const int n = compare_with_bilinear(store, sources, {1.0, 42.0, 2.0, 43.0}, 0.5 + 1e-3, 2);
   EXPECT_GT(n, 1300);
   // Lossy but bounded, and smaller than lossless.

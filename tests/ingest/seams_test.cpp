@@ -4,8 +4,8 @@
 
 #include <array>
 #include <cmath>
-#include <optional>
 #include <cstring>
+#include <optional>
 
 #include "../support/test_support.h"
 #include "built_stores.h"
@@ -63,7 +63,8 @@ int64_t check_borders(const tiles::Store& store, int level) {
 TEST(Seams, BordersEqualNeighbourInteriorsAtEveryLevel) {
   const auto& store = pyrenees_store();
   int64_t checked = 0;
-  for (int level = 0; level <= store.manifest().max_level; ++level) checked += check_borders(store, level);
+  for (int level = 0; level <= store.manifest().max_level; ++level)
+    checked += check_borders(store, level);
   EXPECT_GT(checked, 100000);
 }
 

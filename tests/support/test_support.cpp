@@ -12,8 +12,12 @@
 namespace relief::testing {
 namespace fs = std::filesystem;
 
-fs::path data_dir() { return RELIEF_DATA_DIR; }
-std::string data(const std::string& relative) { return (data_dir() / relative).string(); }
+fs::path data_dir() {
+  return RELIEF_DATA_DIR;
+}
+std::string data(const std::string& relative) {
+  return (data_dir() / relative).string();
+}
 
 ScratchDir::ScratchDir(const std::string& name) {
   path_ = fs::temp_directory_path() / ("relief_test_" + name + "_" + std::to_string(::getpid()));
@@ -26,7 +30,9 @@ ScratchDir::~ScratchDir() {
   fs::remove_all(path_, ec);
 }
 
-std::string relief_binary() { return RELIEF_BINARY; }
+std::string relief_binary() {
+  return RELIEF_BINARY;
+}
 
 int spawn_relief(const std::vector<std::string>& args) {
   std::vector<std::string> all = {RELIEF_BINARY};
@@ -60,11 +66,12 @@ std::string slurp(const fs::path& p) {
 
 RunResult run_relief(const std::vector<std::string>& args, const std::string& shell_prefix) {
   static int counter = 0;
-  const fs::path base = fs::temp_directory_path() /
-                        ("relief_run_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
+  const fs::path base = fs::temp_directory_path() / ("relief_run_" + std::to_string(::getpid()) +
+                                                     "_" + std::to_string(counter++));
   std::string cmd = shell_prefix + " " + quote(RELIEF_BINARY);
   for (const auto& a : args) cmd += " " + quote(a);
-  cmd += " >" + quote(base.string() + ".out") + " 2>" + quote(base.string() + ".err") + " </dev/null";
+  cmd +=
+      " >" + quote(base.string() + ".out") + " 2>" + quote(base.string() + ".err") + " </dev/null";
   const int status = std::system(("bash -c " + quote(cmd)).c_str());
   RunResult r;
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
@@ -78,8 +85,8 @@ RunResult run_relief(const std::vector<std::string>& args, const std::string& sh
 std::vector<fs::path> temporary_files(const fs::path& dir) {
   std::vector<fs::path> found;
   std::error_code ec;
-  for (auto it = fs::recursive_directory_iterator(dir, ec); !ec && it != fs::recursive_directory_iterator();
-       it.increment(ec)) {
+  for (auto it = fs::recursive_directory_iterator(dir, ec);
+       !ec && it != fs::recursive_directory_iterator(); it.increment(ec)) {
     if (it->is_regular_file() && is_temporary_file(it->path())) found.push_back(it->path());
   }
   return found;

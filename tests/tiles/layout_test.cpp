@@ -32,9 +32,9 @@ TEST(StoreLayout, PathsInvertAndNoDirectoryExceeds4096Entries) {
 }
 
 TEST(StoreLayout, RejectsNonTilePaths) {
-  for (const char* bad : {"", "manifest.json", "0/index.rli", "../0/000.rtile", "7/000.rtile",
-                          "1/004.rtile", "x/000.rtile", "0/00.rtile", "0/zzz.rtile",
-                          "99/000.rtile"}) {
+  for (const char* bad :
+       {"", "manifest.json", "0/index.rli", "../0/000.rtile", "7/000.rtile", "1/004.rtile",
+        "x/000.rtile", "0/00.rtile", "0/zzz.rtile", "99/000.rtile"}) {
     EXPECT_FALSE(tile_key_from_relative_path(bad).has_value()) << bad;
   }
 }

@@ -20,7 +20,8 @@ inline Raster terrain(int w, int h, unsigned seed = 1, bool holes = true) {
     }
   }
   if (holes) {
-    for (int k = 0; k < w * h / 50; ++k) v[rng() % v.size()] = std::numeric_limits<float>::quiet_NaN();
+    for (int k = 0; k < w * h / 50; ++k)
+      v[rng() % v.size()] = std::numeric_limits<float>::quiet_NaN();
   }
   return r;
 }

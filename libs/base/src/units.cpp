@@ -1,8 +1,8 @@
 #include "relief/base/units.h"
 
+#include <fmt/format.h>
 #include <charconv>
 #include <cmath>
-#include <fmt/format.h>
 
 namespace relief {
 
@@ -12,12 +12,19 @@ Result<uint64_t> parse_byte_size(std::string_view text) {
   if (ec != std::errc() || value < 0) return fail(fmt::format("'{}' is not a size", text));
   std::string_view unit(ptr, text.data() + text.size() - ptr);
   double scale = 1;
-  if (unit.empty() || unit == "B") scale = 1;
-  else if (unit == "K" || unit == "KiB" || unit == "k") scale = 1024.0;
-  else if (unit == "M" || unit == "MiB") scale = 1024.0 * 1024;
-  else if (unit == "G" || unit == "GiB") scale = 1024.0 * 1024 * 1024;
-  else if (unit == "T" || unit == "TiB") scale = 1024.0 * 1024 * 1024 * 1024;
-  else return fail(fmt::format("'{}' has an unknown unit '{}' (use B, KiB, MiB, GiB, TiB)", text, unit));
+  if (unit.empty() || unit == "B")
+    scale = 1;
+  else if (unit == "K" || unit == "KiB" || unit == "k")
+    scale = 1024.0;
+  else if (unit == "M" || unit == "MiB")
+    scale = 1024.0 * 1024;
+  else if (unit == "G" || unit == "GiB")
+    scale = 1024.0 * 1024 * 1024;
+  else if (unit == "T" || unit == "TiB")
+    scale = 1024.0 * 1024 * 1024 * 1024;
+  else
+    return fail(
+        fmt::format("'{}' has an unknown unit '{}' (use B, KiB, MiB, GiB, TiB)", text, unit));
   return static_cast<uint64_t>(std::llround(value * scale));
 }
 

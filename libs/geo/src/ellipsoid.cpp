@@ -5,8 +5,12 @@
 
 namespace relief::geo {
 
-double degrees_to_radians(double deg) { return deg * std::numbers::pi / 180.0; }
-double radians_to_degrees(double rad) { return rad * 180.0 / std::numbers::pi; }
+double degrees_to_radians(double deg) {
+  return deg * std::numbers::pi / 180.0;
+}
+double radians_to_degrees(double rad) {
+  return rad * 180.0 / std::numbers::pi;
+}
 
 Ecef to_ecef(const Geodetic& g) {
   using namespace wgs84;

@@ -55,7 +55,9 @@ uint32_t compact_bits(uint64_t x) {
 }
 }  // namespace
 
-uint64_t TileKey::morton() const { return spread_bits(x) | (spread_bits(y) << 1); }
+uint64_t TileKey::morton() const {
+  return spread_bits(x) | (spread_bits(y) << 1);
+}
 
 TileKey TileKey::from_morton(int level, uint64_t m) {
   return {level, compact_bits(m), compact_bits(m >> 1)};
@@ -70,6 +72,8 @@ std::string TileKey::quadkey() const {
   return key;
 }
 
-std::string TileKey::to_string() const { return fmt::format("{}/{}/{}", level, x, y); }
+std::string TileKey::to_string() const {
+  return fmt::format("{}/{}/{}", level, x, y);
+}
 
 }  // namespace relief::geo

@@ -61,7 +61,8 @@ std::string fingerprint(const BuildOptions& o, const tiles::CodecOptions& codec,
     std::error_code ec;
     const auto size = fs::file_size(in, ec);
     const auto mtime = fs::last_write_time(in, ec).time_since_epoch().count();
-    inputs.push_back({{"path", fs::absolute(in).string()}, {"size", ec ? 0 : size}, {"mtime", mtime}});
+    inputs.push_back(
+        {{"path", fs::absolute(in).string()}, {"size", ec ? 0 : size}, {"mtime", mtime}});
   }
   j["inputs"] = inputs;
   j["kind"] = tiles::to_string(o.kind);
@@ -88,22 +89,27 @@ Result<bool> prepare_output(const BuildOptions& o, const std::string& print) {
   const bool exists = fs::is_directory(out, ec);
   const bool empty = exists && fs::is_empty(out, ec);
   if (exists && !empty && !is_store_like(out)) {
-    return fail(fmt::format("{}: exists and is not a relief store; choose another output", out.string()));
+    return fail(
+        fmt::format("{}: exists and is not a relief store; choose another output", out.string()));
   }
   if (exists && is_store_like(out)) {
     const fs::path state = out / kBuildDir / kStateName;
     const bool complete = fs::exists(out / tiles::kManifestName, ec);
     if (!o.overwrite) {
       if (complete) {
-        return fail(fmt::format("{}: store already exists (pass --overwrite to rebuild it)", out.string()));
+        return fail(
+            fmt::format("{}: store already exists (pass --overwrite to rebuild it)", out.string()));
       }
       auto text = read_text_file(state);
       if (text && *text == print) return true;  // an interrupted build with the same parameters
-      return fail(fmt::format("{}: holds an interrupted build with other parameters "
-                              "(pass --overwrite to start again)", out.string()));
+      return fail(
+          fmt::format("{}: holds an interrupted build with other parameters "
+                      "(pass --overwrite to start again)",
+                      out.string()));
     }
     fs::remove_all(out, ec);
-    if (ec) return fail(fmt::format("{}: cannot remove the old store: {}", out.string(), ec.message()));
+    if (ec)
+      return fail(fmt::format("{}: cannot remove the old store: {}", out.string(), ec.message()));
   }
   fs::create_directories(out / kBuildDir, ec);
   if (ec) return fail(fmt::format("{}: cannot create: {}", out.string(), ec.message()));
@@ -115,10 +121,14 @@ tiles::CodecOptions choose_codec(const BuildOptions& o) {
   tiles::CodecOptions c;
   c.max_error = o.max_error;
   c.quality = o.quality;
-  if (o.codec) c.codec = *o.codec;
-  else if (o.kind == tiles::DatasetKind::Imagery) c.codec = tiles::Codec::Jpeg;
-  else if (o.max_error > 0) c.codec = tiles::Codec::Lerc;
-  else c.codec = tiles::Codec::Zstd;
+  if (o.codec)
+    c.codec = *o.codec;
+  else if (o.kind == tiles::DatasetKind::Imagery)
+    c.codec = tiles::Codec::Jpeg;
+  else if (o.max_error > 0)
+    c.codec = tiles::Codec::Lerc;
+  else
+    c.codec = tiles::Codec::Zstd;
   return c;
 }
 
@@ -137,12 +147,35 @@ Status validate_options(const BuildOptions& o, const tiles::CodecOptions& codec)
   if (o.max_error > 0 && codec.codec != tiles::Codec::Lerc) {
     return fail("--max-error: only the lerc codec is lossy with a bounded error");
   }
-  if (o.quality < 1 || o.quality > 100) return fail(fmt::format("--quality: {} is not in 1..100", o.quality));
+  if (o.quality < 1 || o.quality > 100)
+    return fail(fmt::format("--quality: {} is not in 1..100", o.quality));
   if (!(o.warp_error >= 0 && o.warp_error <= 10)) {
     return fail(fmt::format("--warp-error: {} is not in 0..10 pixels", o.warp_error));
   }
-  if (o.memory_budget < (uint64_t{64} << 20)) return fail("--memory: the budget must be at least 64 MiB");
   return {};
+}
+
+// How --memory is spent. The budget covers the whole process: its code and
+// libraries, each worker's buffers (warp destination, zstd contexts, a tile
+// being assembled and encoded), and two caches that get what is left.
+struct MemoryPlan {
+  uint64_t gdal_cache = 0;  // GDAL's block cache for source reads
+  uint64_t core_cache = 0;  // decoded tile interiors
+};
+constexpr uint64_t kMiB = uint64_t{1} << 20;
+constexpr uint64_t kProcessReserve = 40 * kMiB;
+constexpr uint64_t kWorkerReserve = 12 * kMiB;
+constexpr uint64_t kMinimumCaches = 16 * kMiB;
+
+Result<MemoryPlan> plan_memory(uint64_t budget, unsigned workers) {
+  const uint64_t reserved = kProcessReserve + workers * kWorkerReserve;
+  if (budget < reserved + kMinimumCaches) {
+    return fail(
+        fmt::format("--memory: {} MiB is too small for {} worker thread(s) (at least {} MiB)",
+                    budget / kMiB, workers, (reserved + kMinimumCaches + kMiB - 1) / kMiB));
+  }
+  const uint64_t caches = budget - reserved;
+  return MemoryPlan{caches / 3, caches - caches / 3};
 }
 
 struct LevelResult {
@@ -153,13 +186,20 @@ struct LevelResult {
 class Builder {
  public:
   Builder(const BuildOptions& o, std::vector<Source> sources, geo::TileGrid grid,
-          tiles::CodecOptions codec, int min_level, int max_level, Executor& ex, Progress& progress)
-      : o_(o), sources_(std::move(sources)), grid_(grid), codec_(codec), min_level_(min_level),
-        max_level_(max_level), ex_(ex), progress_(progress),
+          tiles::CodecOptions codec, int min_level, int max_level, MemoryPlan memory, Executor& ex,
+          Progress& progress)
+      : o_(o),
+        sources_(std::move(sources)),
+        grid_(grid),
+        codec_(codec),
+        min_level_(min_level),
+        max_level_(max_level),
+        ex_(ex),
+        progress_(progress),
         type_(o.kind == tiles::DatasetKind::Imagery ? tiles::SampleType::UInt8
                                                     : tiles::SampleType::Float32),
         groups_(group_sources(sources_)),
-        cores_(o.output / kBuildDir / "cores", o.memory_budget / 2) {}
+        cores_(o.output / kBuildDir / "cores", memory.core_cache) {}
 
   Result<BuildReport> run() {
     const auto start = std::chrono::steady_clock::now();
@@ -171,7 +211,8 @@ class Builder {
     };
     RELIEF_CHECK(warp_finest());
     lap("warp");
-    for (int level = max_level_ - 1; level >= min_level_; --level) RELIEF_CHECK(build_parents(level));
+    for (int level = max_level_ - 1; level >= min_level_; --level)
+      RELIEF_CHECK(build_parents(level));
     lap("pyramid");
     std::vector<tiles::LevelIndex> indices;
     for (int level = min_level_; level <= max_level_; ++level) {
@@ -197,25 +238,32 @@ class Builder {
   }
 
  private:
-  fs::path marker(const std::string& name) const { return o_.output / kBuildDir / (name + ".done"); }
+  fs::path marker(const std::string& name) const {
+    return o_.output / kBuildDir / (name + ".done");
+  }
   bool done(const std::string& name) const {
     std::error_code ec;
     return fs::exists(marker(name), ec);
   }
-  Status mark_done(const std::string& name) { return write_text_file_atomic(marker(name), "done\n"); }
+  Status mark_done(const std::string& name) {
+    return write_text_file_atomic(marker(name), "done\n");
+  }
 
   std::vector<TileKey> finest_tiles() const {
     std::set<TileKey> keys;
     const double n = TileKey::tiles_per_side(max_level_);
     for (const auto& s : sources_) {
-      const auto col = [&](double lon) { return static_cast<int64_t>(std::floor((lon + 180.0) / 360.0 * n)); };
+      const auto col = [&](double lon) {
+        return static_cast<int64_t>(std::floor((lon + 180.0) / 360.0 * n));
+      };
       const auto row = [&](double lat) {
         return std::clamp<int64_t>(static_cast<int64_t>(std::floor((90.0 - lat) / 180.0 * n)), 0,
                                    static_cast<int64_t>(n) - 1);
       };
       for (int64_t y = row(s.box.north); y <= row(s.box.south); ++y) {
         for (int64_t x = col(s.box.west); x <= col(s.box.east); ++x) {
-          const int64_t wrapped = ((x % static_cast<int64_t>(n)) + static_cast<int64_t>(n)) % static_cast<int64_t>(n);
+          const int64_t wrapped =
+              ((x % static_cast<int64_t>(n)) + static_cast<int64_t>(n)) % static_cast<int64_t>(n);
           keys.insert({max_level_, static_cast<uint32_t>(wrapped), static_cast<uint32_t>(y)});
         }
       }
@@ -248,7 +296,8 @@ class Builder {
           warper = std::make_unique<TileWarper>(sources_, groups_, o_.kind, grid_, o_.warp_error);
         }
         auto core = warper->warp(keys[i]);
-        if (!core) error.set(core.error());
+        if (!core)
+          error.set(core.error());
         else if (core->any_valid()) {
           if (auto st = cores_.write(keys[i], *core); !st) error.set(st.error());
         }
@@ -305,7 +354,8 @@ class Builder {
     ex_.parallel_for(keys.size(), [&](size_t i) {
       if (!error.failed()) {
         auto entry = write_tile(keys[i]);
-        if (!entry) error.set(entry.error());
+        if (!entry)
+          error.set(entry.error());
         else {
           std::lock_guard lock(mutex);
           result.index.add(entry->first);
@@ -363,8 +413,8 @@ class Builder {
     m.sample_type = type_;
     m.bands = type_ == tiles::SampleType::Float32 ? 1 : 4;
     m.units = o_.kind == tiles::DatasetKind::Elevation ? "m"
-              : o_.kind == tiles::DatasetKind::Sar    ? "amplitude"
-                                                      : "";
+              : o_.kind == tiles::DatasetKind::Sar     ? "amplitude"
+                                                       : "";
     m.tile_log2_height = grid_.log2_height();
     m.border = grid_.border();
     m.min_level = min_level_;
@@ -393,7 +443,8 @@ class Builder {
       if (!bytes) continue;
       auto h = tiles::parse_tile_header(*bytes, "");
       if (!h || h->stats.valid_count == 0) continue;
-      const double n = static_cast<double>(h->stats.valid_count) * (type_ == tiles::SampleType::UInt8 ? 3 : 1);
+      const double n =
+          static_cast<double>(h->stats.valid_count) * (type_ == tiles::SampleType::UInt8 ? 3 : 1);
       count += n;
       sum += h->stats.mean * n;
       sum_sq += (h->stats.stddev * h->stats.stddev + h->stats.mean * h->stats.mean) * n;
@@ -432,11 +483,12 @@ Result<BuildReport> build_store(const BuildOptions& o, Executor& executor, Progr
   auto grid = geo::TileGrid::create(o.tile_log2_height, o.border);
   if (!grid) return fail(fmt::format("--tile-size/--border: {}", grid.error().message));
 
+  const MemoryPlan memory = RELIEF_TRY(plan_memory(o.memory_budget, executor.concurrency()));
   init_gdal();
-  // GDAL's block cache gets a quarter of the budget; decoded interiors half.
-  GDALSetCacheMax64(static_cast<GIntBig>(o.memory_budget / 4));
+  GDALSetCacheMax64(static_cast<GIntBig>(memory.gdal_cache));
   std::vector<Source> sources;
-  for (const auto& input : o.inputs) sources.push_back(RELIEF_TRY(describe_source(input, o.kind, o.src_crs)));
+  for (const auto& input : o.inputs)
+    sources.push_back(RELIEF_TRY(describe_source(input, o.kind, o.src_crs)));
   RELIEF_CHECK(check_compatible(sources));
 
   double finest_spacing = std::numeric_limits<double>::infinity();
@@ -451,7 +503,8 @@ Result<BuildReport> build_store(const BuildOptions& o, Executor& executor, Progr
   }
   const std::string print = fingerprint(o, codec, min_level, max_level);
   RELIEF_TRY(prepare_output(o, print));
-  Builder builder(o, std::move(sources), *grid, codec, min_level, max_level, executor, progress);
+  Builder builder(o, std::move(sources), *grid, codec, min_level, max_level, memory, executor,
+                  progress);
   return builder.run();
 }
 

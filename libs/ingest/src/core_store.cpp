@@ -50,8 +50,8 @@ std::vector<geo::TileKey> CoreStore::list(int level) const {
   const fs::path root = dir_ / fmt::format("{}", level);
   std::error_code ec;
   if (!fs::is_directory(root, ec)) return keys;
-  for (auto it = fs::recursive_directory_iterator(root, ec); it != fs::recursive_directory_iterator();
-       it.increment(ec)) {
+  for (auto it = fs::recursive_directory_iterator(root, ec);
+       it != fs::recursive_directory_iterator(); it.increment(ec)) {
     if (ec || !it->is_regular_file() || is_temporary_file(it->path())) continue;
     const std::string rel = fs::relative(it->path(), dir_).generic_string();
     if (auto key = tiles::tile_key_from_relative_path(rel)) keys.push_back(*key);

@@ -18,8 +18,6 @@ namespace fs = std::filesystem;
 
 namespace {
 constexpr int64_t kMaxExportSamples = int64_t{1} << 34;  // 16 Gi samples
-const char* kWgs84Wkt =
-    R"(GEOGCS["WGS 84",DATUM["WGS_1984",SPHEROID["WGS 84",6378137,298.257223563]],PRIMEM["Greenwich",0],UNIT["degree",0.0174532925199433],AUTHORITY["EPSG","4326"]])";
 }  // namespace
 
 Result<ExportReport> export_geotiff(const ExportOptions& o, Progress& progress) {
@@ -46,27 +44,34 @@ Result<ExportReport> export_geotiff(const ExportOptions& o, Progress& progress) 
   const int64_t width = i1 - i0, height = j1 - j0;
   if (width <= 0 || height <= 0 || width * height > kMaxExportSamples || width > INT32_MAX ||
       height > INT32_MAX) {
-    return fail(fmt::format("--bbox: gives a {} x {} raster at level {}; choose a smaller box or level",
-                            width, height, o.level));
+    return fail(
+        fmt::format("--bbox: gives a {} x {} raster at level {}; choose a smaller box or level",
+                    width, height, o.level));
   }
 
   init_gdal();
   const bool imagery = m.sample_type == tiles::SampleType::UInt8;
   const int bands = imagery ? 4 : 1;
   const std::string tmp = o.output.string() + std::string(kTempMarker) + std::to_string(::getpid());
-  const char* create_options[] = {"TILED=YES", "COMPRESS=DEFLATE", "BIGTIFF=IF_SAFER",
+  const char* create_options[] = {"TILED=YES",
+                                  "COMPRESS=DEFLATE",
+                                  "BIGTIFF=IF_SAFER",
                                   imagery ? "PHOTOMETRIC=RGB" : "PREDICTOR=3",
-                                  imagery ? "ALPHA=UNASSOCIATED" : nullptr, nullptr};
+                                  imagery ? "ALPHA=UNASSOCIATED" : nullptr,
+                                  nullptr};
   GDALDriverH gtiff = GDALGetDriverByName("GTiff");
   Dataset out(GDALCreate(gtiff, tmp.c_str(), static_cast<int>(width), static_cast<int>(height),
                          bands, imagery ? GDT_Byte : GDT_Float32,
                          const_cast<char**>(create_options)));
-  if (!out) return fail(fmt::format("{}: cannot create: {}", o.output.string(), gdal_error("GTiff")));
-  double gt[6] = {-180.0 + static_cast<double>(i0) * d, d, 0, 90.0 - static_cast<double>(j0) * d, 0, -d};
+  if (!out)
+    return fail(fmt::format("{}: cannot create: {}", o.output.string(), gdal_error("GTiff")));
+  double gt[6] = {-180.0 + static_cast<double>(i0) * d, d, 0,
+                  90.0 - static_cast<double>(j0) * d,   0, -d};
   GDALSetGeoTransform(out.get(), gt);
   GDALSetProjection(out.get(), kWgs84Wkt);
   if (!imagery) {
-    GDALSetRasterNoDataValue(GDALGetRasterBand(out.get(), 1), std::numeric_limits<double>::quiet_NaN());
+    GDALSetRasterNoDataValue(GDALGetRasterBand(out.get(), 1),
+                             std::numeric_limits<double>::quiet_NaN());
     GDALFillRaster(GDALGetRasterBand(out.get(), 1), std::numeric_limits<double>::quiet_NaN(), 0);
   }
   auto discard = [&](Error e) -> Result<ExportReport> {
@@ -78,7 +83,8 @@ Result<ExportReport> export_geotiff(const ExportOptions& o, Progress& progress) 
   const int w = grid.width(), h = grid.height(), b = grid.border();
   const int64_t tx0 = i0 / w, tx1 = (i1 - 1) / w, ty0 = j0 / h, ty1 = (j1 - 1) / h;
   ExportReport report{static_cast<int>(width), static_cast<int>(height), 0};
-  progress.begin(fmt::format("export level {}", o.level), static_cast<uint64_t>((tx1 - tx0 + 1) * (ty1 - ty0 + 1)));
+  progress.begin(fmt::format("export level {}", o.level),
+                 static_cast<uint64_t>((tx1 - tx0 + 1) * (ty1 - ty0 + 1)));
   for (int64_t ty = ty0; ty <= ty1; ++ty) {
     for (int64_t tx = tx0; tx <= tx1; ++tx) {
       progress.advance();
@@ -97,9 +103,10 @@ Result<ExportReport> export_geotiff(const ExportOptions& o, Progress& progress) 
       const CPLErr err = GDALDatasetRasterIO(
           out.get(), GF_Write, static_cast<int>(gx0 - i0), static_cast<int>(gy0 - j0), cw, ch,
           window.bytes().data(), cw, ch, imagery ? GDT_Byte : GDT_Float32, bands, band_map,
-          imagery ? 4 : 4, imagery ? 4 * cw : 4 * cw, imagery ? 1 : 0);
+          /*pixel space*/ 4, /*line space*/ 4 * cw, /*band space*/ imagery ? 1 : 0);
       if (err != CE_None) {
-        return discard(Error{fmt::format("{}: write failed: {}", o.output.string(), gdal_error("GTiff"))});
+        return discard(
+            Error{fmt::format("{}: write failed: {}", o.output.string(), gdal_error("GTiff"))});
       }
       ++report.tiles_read;
     }
@@ -114,7 +121,8 @@ Result<ExportReport> export_geotiff(const ExportOptions& o, Progress& progress) 
   }
   if (::rename(tmp.c_str(), o.output.c_str()) != 0) {
     ::unlink(tmp.c_str());
-    return fail(fmt::format("{}: cannot rename into place: {}", o.output.string(), errno_text(errno)));
+    return fail(
+        fmt::format("{}: cannot rename into place: {}", o.output.string(), errno_text(errno)));
   }
   return report;
 }

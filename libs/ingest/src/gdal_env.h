@@ -8,6 +8,10 @@
 
 namespace relief::ingest {
 
+// WGS84 geographic coordinates (EPSG:4326), longitude first: the store's CRS.
+inline constexpr const char* kWgs84Wkt =
+    R"(GEOGCS["WGS 84",DATUM["WGS_1984",SPHEROID["WGS 84",6378137,298.257223563]],PRIMEM["Greenwich",0],UNIT["degree",0.0174532925199433],AUTHORITY["EPSG","4326"]])";
+
 // Registers drivers and silences GDAL's stderr output. Safe to call often.
 void init_gdal();
 // The last GDAL error message of this thread, or `fallback` when there is none.

@@ -58,16 +58,18 @@ void downsample_rgba(const tiles::Raster& child, tiles::Raster& parent, int ox, 
 
 }  // namespace
 
-tiles::Raster downsample(const std::array<const tiles::Raster*, 4>& children, int width,
-                         int height, tiles::SampleType type) {
+tiles::Raster downsample(const std::array<const tiles::Raster*, 4>& children, int width, int height,
+                         tiles::SampleType type) {
   tiles::Raster parent = tiles::Raster::empty(type, width, height);
   for (int c = 0; c < 4; ++c) {
     const tiles::Raster* child = children[static_cast<size_t>(c)];
     if (!child) continue;
     assert(child->width() == width && child->height() == height);
     const int ox = (c % 2) * width / 2, oy = (c / 2) * height / 2;
-    if (type == tiles::SampleType::Float32) downsample_float(*child, parent, ox, oy);
-    else downsample_rgba(*child, parent, ox, oy);
+    if (type == tiles::SampleType::Float32)
+      downsample_float(*child, parent, ox, oy);
+    else
+      downsample_rgba(*child, parent, ox, oy);
   }
   return parent;
 }
@@ -78,9 +80,19 @@ tiles::Raster assemble_bordered(const std::array<const tiles::Raster*, 9>& neigh
   tiles::Raster out = tiles::Raster::empty(type, width + 2 * border, height + 2 * border);
   // Source start and destination start along one axis for offsets -1, 0, +1.
   auto span = [border](int d, int size, int& src, int& dst, int& len) {
-    if (d < 0) { src = size - border; dst = 0; len = border; }
-    else if (d == 0) { src = 0; dst = border; len = size; }
-    else { src = 0; dst = border + size; len = border; }
+    if (d < 0) {
+      src = size - border;
+      dst = 0;
+      len = border;
+    } else if (d == 0) {
+      src = 0;
+      dst = border;
+      len = size;
+    } else {
+      src = 0;
+      dst = border + size;
+      len = border;
+    }
   };
   for (int dy = -1; dy <= 1; ++dy) {
     for (int dx = -1; dx <= 1; ++dx) {

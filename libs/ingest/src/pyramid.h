@@ -10,8 +10,8 @@ namespace relief::ingest {
 
 // children[cy * 2 + cx] is child (cx, cy) of the parent, interior only, or
 // nullptr where the child is empty. Returns the parent's interior.
-tiles::Raster downsample(const std::array<const tiles::Raster*, 4>& children, int width,
-                         int height, tiles::SampleType type);
+tiles::Raster downsample(const std::array<const tiles::Raster*, 4>& children, int width, int height,
+                         tiles::SampleType type);
 
 // Copies the 3 x 3 neighbourhood of interiors into one bordered tile.
 // neighbours[(dy + 1) * 3 + (dx + 1)] is the interior of neighbour (dx, dy), or

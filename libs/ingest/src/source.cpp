@@ -13,7 +13,9 @@
 namespace relief::ingest {
 namespace {
 
-bool is_complex(GDALDataType t) { return GDALDataTypeIsComplex(t) != 0; }
+bool is_complex(GDALDataType t) {
+  return GDALDataTypeIsComplex(t) != 0;
+}
 
 std::string authority_name(OGRSpatialReferenceH srs, const std::string& wkt) {
   OSRAutoIdentifyEPSG(srs);
@@ -44,8 +46,9 @@ Result<Source> describe_source(const std::string& path, tiles::DatasetKind kind,
   const GDALDataType type = GDALGetRasterDataType(GDALGetRasterBand(ds.get(), 1));
   s.data_type = GDALGetDataTypeName(type);
   if (is_complex(type)) {
-    return fail(fmt::format("{}: unsupported data type {} (complex samples; convert to amplitude first)",
-                            path, s.data_type));
+    return fail(
+        fmt::format("{}: unsupported data type {} (complex samples; convert to amplitude first)",
+                    path, s.data_type));
   }
   const GDALColorInterp last = GDALGetRasterColorInterpretation(GDALGetRasterBand(ds.get(), bands));
   s.has_alpha = bands > 1 && last == GCI_AlphaBand;
@@ -86,8 +89,10 @@ Result<Source> describe_source(const std::string& path, tiles::DatasetKind kind,
     CPLFree(out);
   }
   if (s.crs_wkt.empty()) {
-    return fail(fmt::format("{}: has a geotransform but no coordinate reference system "
-                            "(pass --src-crs, e.g. --src-crs EPSG:4326)", path));
+    return fail(
+        fmt::format("{}: has a geotransform but no coordinate reference system "
+                    "(pass --src-crs, e.g. --src-crs EPSG:4326)",
+                    path));
   }
   {
     OGRSpatialReferenceH srs = OSRNewSpatialReference(s.crs_wkt.c_str());
@@ -108,9 +113,11 @@ Result<Source> describe_source(const std::string& path, tiles::DatasetKind kind,
   CPLFree(dst_wkt);
   options[0] = src_opt.c_str();
   options[1] = dst_opt.c_str();
-  void* transformer = GDALCreateGenImgProjTransformer2(ds.get(), nullptr, const_cast<char**>(options));
+  void* transformer =
+      GDALCreateGenImgProjTransformer2(ds.get(), nullptr, const_cast<char**>(options));
   if (!transformer) {
-    return fail(fmt::format("{}: cannot transform to WGS84: {}", path, gdal_error("unknown error")));
+    return fail(
+        fmt::format("{}: cannot transform to WGS84: {}", path, gdal_error("unknown error")));
   }
   double out_gt[6];
   int px = 0, py = 0;
@@ -144,7 +151,7 @@ Status check_compatible(const std::vector<Source>& sources) {
 }
 
 tiles::SourceInfo to_source_info(const Source& s) {
-  return {s.path, s.crs_name, s.width, s.height, s.colour_bands + (s.has_alpha ? 1 : 0),
+  return {s.path,     s.crs_name, s.width, s.height, s.colour_bands + (s.has_alpha ? 1 : 0),
           s.data_type};
 }
 

@@ -19,9 +19,9 @@ struct Source {
   int colour_bands = 0;  // bands carried into the store (alpha excluded)
   bool has_alpha = false;
   std::string data_type;
-  bool north_up = true;      // plain geotransform: no rotation terms, no GCPs
-  geo::GeoBox box;           // lon/lat extent; east may exceed 180 if it crosses the antimeridian
-  double spacing_deg = 0;    // sample spacing in degrees after reprojection
+  bool north_up = true;    // plain geotransform: no rotation terms, no GCPs
+  geo::GeoBox box;         // lon/lat extent; east may exceed 180 if it crosses the antimeridian
+  double spacing_deg = 0;  // sample spacing in degrees after reprojection
 };
 
 // Opens `path` and checks that it can go into a dataset of `kind`.

@@ -11,9 +11,6 @@
 namespace relief::ingest {
 namespace {
 
-const char* kWgs84Wkt =
-    R"(GEOGCS["WGS 84",DATUM["WGS_1984",SPHEROID["WGS 84",6378137,298.257223563]],PRIMEM["Greenwich",0],UNIT["degree",0.0174532925199433],AUTHORITY["EPSG","4326"]])";
-
 struct WarpOptionsDeleter {
   void operator()(GDALWarpAppOptions* o) const { GDALWarpAppOptionsFree(o); }
 };
@@ -48,16 +45,20 @@ std::vector<MosaicGroup> group_sources(const std::vector<Source>& sources) {
     }
     target->members.push_back(i);
     geo::GeoBox& b = target->box;
-    b = {std::min(b.west, s.box.west), std::min(b.south, s.box.south),
-         std::max(b.east, s.box.east), std::max(b.north, s.box.north)};
+    b = {std::min(b.west, s.box.west), std::min(b.south, s.box.south), std::max(b.east, s.box.east),
+         std::max(b.north, s.box.north)};
   }
   return groups;
 }
 
 TileWarper::TileWarper(const std::vector<Source>& sources, const std::vector<MosaicGroup>& groups,
                        tiles::DatasetKind kind, geo::TileGrid grid, double error_threshold)
-    : sources_(sources), groups_(groups), kind_(kind), grid_(grid),
-      error_threshold_(error_threshold), open_(groups.size()) {}
+    : sources_(sources),
+      groups_(groups),
+      kind_(kind),
+      grid_(grid),
+      error_threshold_(error_threshold),
+      open_(groups.size()) {}
 
 std::vector<size_t> TileWarper::groups_for(const geo::TileKey& key) const {
   // Pad by two samples so bilinear support at the tile edge is never cut off.
@@ -100,7 +101,9 @@ Result<tiles::Raster> TileWarper::warp(const geo::TileKey& key) {
   const bool imagery = kind_ == tiles::DatasetKind::Imagery;
   const int w = grid_.width(), h = grid_.height();
   auto hits = groups_for(key);
-  if (hits.empty()) return tiles::Raster::empty(imagery ? tiles::SampleType::UInt8 : tiles::SampleType::Float32, w, h);
+  if (hits.empty())
+    return tiles::Raster::empty(imagery ? tiles::SampleType::UInt8 : tiles::SampleType::Float32, w,
+                                h);
 
   std::vector<GDALDatasetH> handles;
   for (size_t g : hits) {
@@ -114,7 +117,8 @@ Result<tiles::Raster> TileWarper::warp(const geo::TileKey& key) {
   const int dst_bands = imagery ? colour + 1 : 1;
   GDALDriverH mem = GDALGetDriverByName("MEM");
   Dataset dst(GDALCreate(mem, "", w, h, dst_bands, imagery ? GDT_Byte : GDT_Float32, nullptr));
-  if (!dst) return fail(fmt::format("tile {}: cannot allocate: {}", key.to_string(), gdal_error("MEM")));
+  if (!dst)
+    return fail(fmt::format("tile {}: cannot allocate: {}", key.to_string(), gdal_error("MEM")));
   const geo::GeoBox b = key.bounds();
   const double d = grid_.sample_spacing(key.level);
   double gt[6] = {b.west, d, 0, b.north, 0, -d};
@@ -140,13 +144,19 @@ Result<tiles::Raster> TileWarper::warp(const geo::TileKey& key) {
   // which is what a build does unless --max-level asks for a coarser level.
   double source_spacing = INFINITY;
   for (size_t g : hits) {
-    for (size_t m : groups_[g].members) source_spacing = std::min(source_spacing, sources_[m].spacing_deg);
+    for (size_t m : groups_[g].members)
+      source_spacing = std::min(source_spacing, sources_[m].spacing_deg);
   }
   const double scale = std::min(1.0, source_spacing / grid_.sample_spacing(key.level));
-  const std::string xscale = fmt::format("XSCALE={}", scale), yscale = fmt::format("YSCALE={}", scale);
-  std::vector<const char*> args = {"-r", imagery ? "cubic" : "bilinear", "-et", threshold.c_str(),
-                                   "-wo", xscale.c_str(), "-wo", yscale.c_str(), "-q"};
-  if (imagery) args.push_back("-dstalpha");
+  const std::string xscale = fmt::format("XSCALE={}", scale),
+                    yscale = fmt::format("YSCALE={}", scale);
+  std::vector<const char*> args = {"-r",  imagery ? "cubic" : "bilinear",
+                                   "-et", threshold.c_str(),
+                                   "-wo", xscale.c_str(),
+                                   "-wo", yscale.c_str(),
+                                   "-q"};
+  if (imagery)
+    args.push_back("-dstalpha");
   else {
     args.insert(args.end(), {"-dstnodata", "nan"});
   }
@@ -160,11 +170,12 @@ Result<tiles::Raster> TileWarper::warp(const geo::TileKey& key) {
                               options.get(), &usage_error);
   if (!out || usage_error) {
     return fail(fmt::format("{}: reprojection to tile {} failed: {}",
-                            sources_[groups_[hits[0]].members[0]].path,
-                            key.to_string(), gdal_error("unknown GDAL error")));
+                            sources_[groups_[hits[0]].members[0]].path, key.to_string(),
+                            gdal_error("unknown GDAL error")));
   }
 
-  tiles::Raster r = tiles::Raster::empty(imagery ? tiles::SampleType::UInt8 : tiles::SampleType::Float32, w, h);
+  tiles::Raster r =
+      tiles::Raster::empty(imagery ? tiles::SampleType::UInt8 : tiles::SampleType::Float32, w, h);
   if (!imagery) {
     if (GDALRasterIO(GDALGetRasterBand(dst.get(), 1), GF_Read, 0, 0, w, h, r.f32().data(), w, h,
                      GDT_Float32, 0, 0) != CE_None) {

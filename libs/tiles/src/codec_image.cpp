@@ -42,8 +42,8 @@ Result<std::vector<std::byte>> encode_png(const Raster& r) {
     return fail("png: encoding failed");
   }
   png_set_write_fn(png, &state, png_append, png_no_flush);
-  png_set_IHDR(png, info, static_cast<png_uint_32>(r.width()), static_cast<png_uint_32>(r.height()), 8,
-               PNG_COLOR_TYPE_RGBA, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
+  png_set_IHDR(png, info, static_cast<png_uint_32>(r.width()), static_cast<png_uint_32>(r.height()),
+               8, PNG_COLOR_TYPE_RGBA, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
                PNG_FILTER_TYPE_DEFAULT);
   png_set_compression_level(png, 3);
   png_set_filter(png, PNG_FILTER_TYPE_BASE, PNG_FILTER_SUB | PNG_FILTER_UP);
@@ -113,7 +113,8 @@ Result<std::vector<std::byte>> encode_jpeg(const Raster& r, int quality) {
 Result<Raster> decode_jpeg(std::span<const std::byte> p, int w, int h) {
   if (p.size() < 4) return fail("jpeg payload is truncated");
   uint32_t jpeg_size = 0;
-  for (int i = 0; i < 4; ++i) jpeg_size |= static_cast<uint32_t>(p[static_cast<size_t>(i)]) << (8 * i);
+  for (int i = 0; i < 4; ++i)
+    jpeg_size |= static_cast<uint32_t>(p[static_cast<size_t>(i)]) << (8 * i);
   if (jpeg_size > p.size() - 4) return fail("jpeg payload is truncated");
   TjHandle tj(tjInitDecompress());
   if (!tj) return fail("jpeg: cannot initialise the decoder");

@@ -98,10 +98,13 @@ ThreadState& thread_state() {
 Result<std::vector<std::byte>> encode_zstd(const Raster& r, int level) {
   ThreadState& ts = thread_state();
   std::vector<uint8_t>& planes = ts.planes;
-  if (r.type() == SampleType::Float32) forward_float(r, planes);
-  else forward_rgba(r, planes);
+  if (r.type() == SampleType::Float32)
+    forward_float(r, planes);
+  else
+    forward_rgba(r, planes);
   std::vector<std::byte> out(ZSTD_compressBound(planes.size()));
-  const size_t n = ZSTD_compressCCtx(ts.cctx, out.data(), out.size(), planes.data(), planes.size(), level);
+  const size_t n =
+      ZSTD_compressCCtx(ts.cctx, out.data(), out.size(), planes.data(), planes.size(), level);
   if (ZSTD_isError(n)) return fail(fmt::format("zstd: {}", ZSTD_getErrorName(n)));
   out.resize(n);
   return out;
@@ -121,8 +124,10 @@ Result<Raster> decode_zstd(std::span<const std::byte> p, SampleType t, int bands
     return fail(fmt::format("zstd payload is corrupt: {}",
                             ZSTD_isError(n) ? ZSTD_getErrorName(n) : "short"));
   }
-  if (t == SampleType::Float32) inverse_float(planes.data(), r);
-  else inverse_rgba(planes.data(), r);
+  if (t == SampleType::Float32)
+    inverse_float(planes.data(), r);
+  else
+    inverse_rgba(planes.data(), r);
   return r;
 }
 

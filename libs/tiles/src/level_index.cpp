@@ -135,7 +135,8 @@ Result<LevelIndex> LevelIndex::parse(std::span<const std::byte> b, const std::st
     }
     IndexEntry e;
     e.key = {level, x0 + static_cast<uint32_t>(bit % cols), y0 + static_cast<uint32_t>(bit / cols)};
-    if (!e.key.valid()) return fail(fmt::format("{}: level index names a tile outside the level", name));
+    if (!e.key.valid())
+      return fail(fmt::format("{}: level index names a tile outside the level", name));
     e.min = read_at<float>(b, record);
     e.max = read_at<float>(b, record + 4);
     e.valid_count = read_at<uint32_t>(b, record + 8);

@@ -9,9 +9,12 @@ using nlohmann::json;
 
 std::string_view to_string(DatasetKind k) {
   switch (k) {
-    case DatasetKind::Elevation: return "elevation";
-    case DatasetKind::Imagery: return "imagery";
-    case DatasetKind::Sar: return "sar";
+    case DatasetKind::Elevation:
+      return "elevation";
+    case DatasetKind::Imagery:
+      return "imagery";
+    case DatasetKind::Sar:
+      return "sar";
   }
   return "?";
 }
@@ -41,16 +44,25 @@ std::string Manifest::to_json() const {
                {"border", border},
                {"registration", "cell-centre"}};
   j["levels"] = {{"min", min_level}, {"max", max_level}};
-  j["extent"] = {{"west", extent.west}, {"south", extent.south}, {"east", extent.east},
+  j["extent"] = {{"west", extent.west},
+                 {"south", extent.south},
+                 {"east", extent.east},
                  {"north", extent.north}};
-  j["statistics"] = {{"min", stats.min}, {"max", stats.max}, {"mean", stats.mean},
-                     {"std", stats.stddev}, {"valid_samples", stats.valid_count}};
-  j["codec"] = {{"name", to_string(codec.codec)}, {"max_error", codec.max_error},
-                {"quality", codec.quality}};
+  j["statistics"] = {{"min", stats.min},
+                     {"max", stats.max},
+                     {"mean", stats.mean},
+                     {"std", stats.stddev},
+                     {"valid_samples", stats.valid_count}};
+  j["codec"] = {
+      {"name", to_string(codec.codec)}, {"max_error", codec.max_error}, {"quality", codec.quality}};
   json sources_json = json::array();
   for (const auto& s : sources) {
-    sources_json.push_back({{"path", s.path}, {"crs", s.crs}, {"width", s.width},
-                            {"height", s.height}, {"bands", s.bands}, {"data_type", s.data_type}});
+    sources_json.push_back({{"path", s.path},
+                            {"crs", s.crs},
+                            {"width", s.width},
+                            {"height", s.height},
+                            {"bands", s.bands},
+                            {"data_type", s.data_type}});
   }
   j["sources"] = sources_json;
   j["created_by"] = created_by;
@@ -90,8 +102,8 @@ Result<Manifest> Manifest::from_json(const std::string& text, const std::string&
       return fail(fmt::format("{}: bad level range", name));
     }
     const auto& e = j.at("extent");
-    m.extent = {e.at("west").get<double>(), e.at("south").get<double>(),
-                e.at("east").get<double>(), e.at("north").get<double>()};
+    m.extent = {e.at("west").get<double>(), e.at("south").get<double>(), e.at("east").get<double>(),
+                e.at("north").get<double>()};
     const auto& s = j.at("statistics");
     m.stats = {s.at("min").get<double>(), s.at("max").get<double>(), s.at("mean").get<double>(),
                s.at("std").get<double>(), s.at("valid_samples").get<uint64_t>()};

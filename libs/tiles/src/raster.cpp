@@ -11,8 +11,10 @@ namespace relief::tiles {
 
 std::string_view to_string(SampleType t) {
   switch (t) {
-    case SampleType::Float32: return "float32";
-    case SampleType::UInt8: return "uint8";
+    case SampleType::Float32:
+      return "float32";
+    case SampleType::UInt8:
+      return "uint8";
   }
   return "?";
 }
@@ -23,7 +25,9 @@ Result<SampleType> sample_type_from_string(std::string_view s) {
   return fail(fmt::format("unknown sample type '{}'", s));
 }
 
-size_t sample_size(SampleType t) { return t == SampleType::Float32 ? 4 : 1; }
+size_t sample_size(SampleType t) {
+  return t == SampleType::Float32 ? 4 : 1;
+}
 
 Raster::Raster(SampleType type, int bands, int width, int height)
     : type_(type), bands_(bands), width_(width), height_(height) {

@@ -41,7 +41,8 @@ Result<Store> Store::open(const fs::path& root) {
     if (!bytes) return std::unexpected(bytes.error());
     auto index = LevelIndex::parse(*bytes, path.string());
     if (!index) return std::unexpected(index.error());
-    if (index->level() != level) return fail(fmt::format("{}: index is for level {}", path.string(), index->level()));
+    if (index->level() != level)
+      return fail(fmt::format("{}: index is for level {}", path.string(), index->level()));
     store.indices_.push_back(std::move(*index));
   }
   return store;
@@ -83,8 +84,9 @@ Result<std::optional<float>> Store::sample(double lon, double lat, int level) co
   auto tile = read_tile(s.tile);
   if (!tile) return std::unexpected(tile.error());
   const int w = tile->raster.width();
-  const float v = tile->raster.f32()[static_cast<size_t>(s.j + grid_.border()) * static_cast<size_t>(w) +
-                                     static_cast<size_t>(s.i + grid_.border())];
+  const float v =
+      tile->raster.f32()[static_cast<size_t>(s.j + grid_.border()) * static_cast<size_t>(w) +
+                         static_cast<size_t>(s.i + grid_.border())];
   if (std::isnan(v)) return std::optional<float>();
   return std::optional<float>(v);
 }

@@ -7,7 +7,9 @@
 
 namespace relief::tiles {
 namespace {
-int block_count(int level) { return level == 0 ? 1 : (2 * level + 11) / 12; }
+int block_count(int level) {
+  return level == 0 ? 1 : (2 * level + 11) / 12;
+}
 }  // namespace
 
 std::string tile_relative_path(const geo::TileKey& key) {

@@ -120,7 +120,8 @@ Result<TileHeader> parse_tile_header(std::span<const std::byte> bytes, const std
     return fail(fmt::format("{}: unknown codec {}", name, static_cast<int>(h.codec)));
   }
   if (2 * h.border >= h.width || 2 * h.border >= h.height) {
-    return fail(fmt::format("{}: bad tile shape {}x{} border {}", name, h.width, h.height, h.border));
+    return fail(
+        fmt::format("{}: bad tile shape {}x{} border {}", name, h.width, h.height, h.border));
   }
   if (h.payload_size != bytes.size() - kTileHeaderSize) {
     return fail(fmt::format("{}: truncated tile (payload {} bytes, header says {})", name,
@@ -136,8 +137,8 @@ Result<Tile> decode_tile(std::span<const std::byte> bytes, const std::string& na
   if (crc32_of(payload) != header->payload_crc) {
     return fail(fmt::format("{}: tile payload checksum mismatch", name));
   }
-  auto raster = decode(header->codec, payload, header->type, header->bands, header->width,
-                       header->height);
+  auto raster =
+      decode(header->codec, payload, header->type, header->bands, header->width, header->height);
   if (!raster) return fail(fmt::format("{}: {}", name, raster.error().message));
   return Tile{*header, std::move(*raster)};
 }

@@ -23,18 +23,19 @@ VerifyReport verify_store(const fs::path& root, Executor& executor, Progress& pr
   // Every file under the level directories: tiles, indices, and nothing else.
   std::set<geo::TileKey> on_disk;
   std::error_code ec;
-  for (auto it = fs::recursive_directory_iterator(root, ec); !ec && it != fs::recursive_directory_iterator();
-       it.increment(ec)) {
+  for (auto it = fs::recursive_directory_iterator(root, ec);
+       !ec && it != fs::recursive_directory_iterator(); it.increment(ec)) {
     if (!it->is_regular_file()) continue;
     const std::string rel = fs::relative(it->path(), root).generic_string();
     if (rel == kManifestName || rel.ends_with(std::string("/") + kLevelIndexName)) continue;
     if (auto key = tile_key_from_relative_path(rel)) {
       on_disk.insert(*key);
     } else if (is_temporary_file(it->path())) {
-      report.problems.push_back(fmt::format("{}: leftover temporary file of an interrupted write",
-                                            it->path().string()));
+      report.problems.push_back(
+          fmt::format("{}: leftover temporary file of an interrupted write", it->path().string()));
     } else {
-      report.problems.push_back(fmt::format("{}: unexpected file in the store", it->path().string()));
+      report.problems.push_back(
+          fmt::format("{}: unexpected file in the store", it->path().string()));
     }
   }
   std::vector<IndexEntry> indexed;

@@ -23,15 +23,15 @@ inline std::unexpected<Error> fail(std::string message) {
 }  // namespace relief
 
 // Propagates the error of an expression returning Result/Status; yields its value.
-#define RELIEF_TRY(expr)                                                \
-  ({                                                                    \
-    auto relief_try_result_ = (expr);                                   \
+#define RELIEF_TRY(expr)                                                         \
+  ({                                                                             \
+    auto relief_try_result_ = (expr);                                            \
     if (!relief_try_result_) return std::unexpected(relief_try_result_.error()); \
-    std::move(*relief_try_result_);                                     \
+    std::move(*relief_try_result_);                                              \
   })
 
-#define RELIEF_CHECK(expr)                                              \
-  do {                                                                  \
-    auto relief_check_status_ = (expr);                                 \
+#define RELIEF_CHECK(expr)                                                           \
+  do {                                                                               \
+    auto relief_check_status_ = (expr);                                              \
     if (!relief_check_status_) return std::unexpected(relief_check_status_.error()); \
   } while (0)

@@ -5,9 +5,9 @@
 namespace relief::geo {
 
 struct Geodetic {
-  double lon_deg = 0;  // east positive, [-180, 180]
-  double lat_deg = 0;  // north positive, [-90, 90]
-  double height_m = 0; // above the ellipsoid
+  double lon_deg = 0;   // east positive, [-180, 180]
+  double lat_deg = 0;   // north positive, [-90, 90]
+  double height_m = 0;  // above the ellipsoid
 };
 
 struct Ecef {

@@ -27,8 +27,8 @@ struct BuildOptions {
   std::vector<std::string> inputs;
   std::filesystem::path output;
   tiles::DatasetKind kind = tiles::DatasetKind::Elevation;
-  std::optional<int> min_level;  // default 0
-  std::optional<int> max_level;  // default: next level finer than the finest source
+  std::optional<int> min_level;       // default 0
+  std::optional<int> max_level;       // default: next level finer than the finest source
   std::optional<tiles::Codec> codec;  // default: zstd (lerc if max_error > 0); jpeg for imagery
   double max_error = 0;               // LERC maximum absolute error
   int quality = 90;                   // JPEG / WebP

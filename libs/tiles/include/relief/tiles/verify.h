@@ -16,6 +16,7 @@ struct VerifyReport {
   bool ok() const { return problems.empty(); }
 };
 
-VerifyReport verify_store(const std::filesystem::path& root, Executor& executor, Progress& progress);
+VerifyReport verify_store(const std::filesystem::path& root, Executor& executor,
+                          Progress& progress);
 
 }  // namespace relief::tiles
