@@ -33,6 +33,8 @@ options:
   --src-crs CRS        CRS for inputs that have none (e.g. EPSG:4326)
   --warp-error PX      reprojection error allowed, in source pixels (default 0.125,
                        as gdalwarp -et; 0 transforms every sample exactly)
+  --gdal-warp          resample every input through GDAL's warper, also inputs
+                       already in WGS84 lon/lat (same result, slower)
   --overwrite          replace an existing store
   -q, --quiet          no progress bar
   --timings            print the wall time of each build phase
@@ -68,7 +70,8 @@ int run_build(const std::vector<std::string>& argv) {
                            {"--warp-error"},
                            {"--overwrite", "", false},
                            {"--quiet", "-q", false},
-                           {"--timings", "", false}},
+                           {"--timings", "", false},
+                           {"--gdal-warp", "", false}},
                           "build");
   if (!args) return report_error(args.error().message);
   ingest::BuildOptions o;
@@ -120,6 +123,7 @@ int run_build(const std::vector<std::string>& argv) {
   if (!warp_error) return fail_on(warp_error.error());
   if (*warp_error) o.warp_error = **warp_error;
   o.overwrite = args->has("--overwrite");
+  o.direct_resampling = !args->has("--gdal-warp");
 
   ThreadExecutor executor(threads->value_or(0));
   auto progress =

@@ -1,6 +1,8 @@
 #include "relief/ingest/build.h"
 
+#include <fcntl.h>
 #include <gdal.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
@@ -71,7 +73,18 @@ std::string fingerprint(const BuildOptions& o, const tiles::CodecOptions& codec,
   j["tile"] = {o.tile_log2_height, o.border};
   j["src_crs"] = o.src_crs.value_or("");
   j["warp_error"] = o.warp_error;
+  j["direct"] = o.direct_resampling;
   return j.dump();
+}
+
+Status sync_filesystem(const fs::path& dir) {
+  const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0) return fail(fmt::format("{}: cannot open: {}", dir.string(), errno_text(errno)));
+  const int rc = ::syncfs(fd);
+  const int err = errno;
+  ::close(fd);
+  if (rc != 0) return fail(fmt::format("{}: sync failed: {}", dir.string(), errno_text(err)));
+  return {};
 }
 
 bool is_store_like(const fs::path& dir) {
@@ -228,6 +241,10 @@ class Builder {
     }
     for (const auto& index : indices) RELIEF_CHECK(tiles::write_level_index(o_.output, index));
     report.manifest = make_manifest(indices.back());
+    // Tiles are renamed into place without fsync (atomic against a crash of the
+    // process); one syncfs makes them all durable before the manifest declares
+    // the store complete, so a power cut cannot leave a manifest over lost tiles.
+    RELIEF_CHECK(sync_filesystem(o_.output));
     RELIEF_CHECK(tiles::write_manifest(o_.output, report.manifest));
     std::error_code ec;
     fs::remove_all(o_.output / kBuildDir, ec);  // scratch only; the store is complete
@@ -293,7 +310,8 @@ class Builder {
           }
         }
         if (!warper) {
-          warper = std::make_unique<TileWarper>(sources_, groups_, o_.kind, grid_, o_.warp_error);
+          warper = std::make_unique<TileWarper>(sources_, groups_, o_.kind, grid_, o_.warp_error,
+                                                o_.direct_resampling);
         }
         auto core = warper->warp(keys[i]);
         if (!core)

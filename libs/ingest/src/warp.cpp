@@ -3,6 +3,7 @@
 #include <gdal_utils.h>
 #include <gdalwarper.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -52,13 +53,34 @@ std::vector<MosaicGroup> group_sources(const std::vector<Source>& sources) {
 }
 
 TileWarper::TileWarper(const std::vector<Source>& sources, const std::vector<MosaicGroup>& groups,
-                       tiles::DatasetKind kind, geo::TileGrid grid, double error_threshold)
+                       tiles::DatasetKind kind, geo::TileGrid grid, double error_threshold,
+                       bool direct)
     : sources_(sources),
       groups_(groups),
       kind_(kind),
       grid_(grid),
       error_threshold_(error_threshold),
-      open_(groups.size()) {}
+      direct_(direct && kind != tiles::DatasetKind::Imagery),
+      open_(groups.size()),
+      direct_resamplers_(groups.size()) {}
+
+const DirectResampler* TileWarper::direct_for(size_t g, int level) {
+  if (!direct_) return nullptr;
+  auto& slot = direct_resamplers_[g];
+  if (!slot) {
+    auto handle = group_handle(g);
+    slot = handle ? DirectResampler::create(*handle, grid_.sample_spacing(level))
+                  : std::optional<DirectResampler>();
+  }
+  return *slot ? &**slot : nullptr;
+}
+
+Result<tiles::Raster> TileWarper::warp_direct(const geo::TileKey& key,
+                                              const std::vector<size_t>& groups) {
+  tiles::Raster r = tiles::Raster::empty(tiles::SampleType::Float32, grid_.width(), grid_.height());
+  for (size_t g : groups) RELIEF_CHECK(direct_resamplers_[g].value()->resample(grid_, key, r));
+  return r;
+}
 
 std::vector<size_t> TileWarper::groups_for(const geo::TileKey& key) const {
   // Pad by two samples so bilinear support at the tile edge is never cut off.
@@ -104,6 +126,10 @@ Result<tiles::Raster> TileWarper::warp(const geo::TileKey& key) {
   if (hits.empty())
     return tiles::Raster::empty(imagery ? tiles::SampleType::UInt8 : tiles::SampleType::Float32, w,
                                 h);
+
+  if (std::all_of(hits.begin(), hits.end(), [&](size_t g) { return direct_for(g, key.level); })) {
+    return warp_direct(key, hits);
+  }
 
   std::vector<GDALDatasetH> handles;
   for (size_t g : hits) {

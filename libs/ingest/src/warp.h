@@ -10,6 +10,9 @@
 #include <string>
 #include <vector>
 
+#include <optional>
+
+#include "direct_resample.h"
 #include "gdal_env.h"
 #include "relief/base/result.h"
 #include "relief/geo/tile_grid.h"
@@ -30,8 +33,9 @@ class TileWarper {
  public:
   // error_threshold: largest error in source pixels of GDAL's approximate
   // transformer (0 = transform every sample exactly), as gdalwarp -et.
+  // direct: use DirectResampler where a group qualifies (same result, faster).
   TileWarper(const std::vector<Source>& sources, const std::vector<MosaicGroup>& groups,
-             tiles::DatasetKind kind, geo::TileGrid grid, double error_threshold);
+             tiles::DatasetKind kind, geo::TileGrid grid, double error_threshold, bool direct);
 
   // The tile's interior (no border). A tile no source covers comes back empty
   // (all nodata), which callers check with stats().valid_count.
@@ -40,13 +44,18 @@ class TileWarper {
  private:
   std::vector<size_t> groups_for(const geo::TileKey& key) const;
   Result<GDALDatasetH> group_handle(size_t g);
+  // The direct resampler of group g, if it qualifies (decided on first use).
+  const DirectResampler* direct_for(size_t g, int level);
+  Result<tiles::Raster> warp_direct(const geo::TileKey& key, const std::vector<size_t>& groups);
 
   const std::vector<Source>& sources_;
   const std::vector<MosaicGroup>& groups_;
   tiles::DatasetKind kind_;
   geo::TileGrid grid_;
   double error_threshold_;
+  bool direct_;
   std::vector<Dataset> open_;  // per group, opened on first use
+  std::vector<std::optional<std::optional<DirectResampler>>> direct_resamplers_;  // per group
 };
 
 }  // namespace relief::ingest

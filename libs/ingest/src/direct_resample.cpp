@@ -1,0 +1,126 @@
+#include "direct_resample.h"
+
+#include <ogr_srs_api.h>
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include <fmt/format.h>
+
+namespace relief::ingest {
+namespace {
+
+bool is_wgs84_lon_lat(GDALDatasetH ds) {
+  // The dataset's own SRS carries its data axis mapping (x = longitude for
+  // GDAL rasters in the traditional GIS order).
+  OGRSpatialReferenceH srs = GDALGetSpatialRef(ds);
+  if (!srs) return false;
+  OGRSpatialReferenceH wgs84 = OSRNewSpatialReference(nullptr);
+  OSRImportFromEPSG(wgs84, 4326);
+  const char* options[] = {"IGNORE_DATA_AXIS_TO_SRS_AXIS_MAPPING=YES", "CRITERION=EQUIVALENT",
+                           nullptr};
+  bool same = OSRIsSameEx(srs, wgs84, options) != 0;
+  OSRDestroySpatialReference(wgs84);
+  if (same) {
+    int count = 0;
+    const int* mapping = OSRGetDataAxisToSRSAxisMapping(srs, &count);
+    same = count >= 2 && mapping[0] == 2 && mapping[1] == 1;  // data x = longitude
+  }
+  return same;
+}
+
+// Source column (or row) and the weight of that column for one destination
+// coordinate, as GDAL's bilinear kernel derives them.
+struct Tap {
+  bool inside;   // GDAL only resamples points inside the source raster
+  int pixel;     // the source pixel containing the point: it must be valid
+  int index;     // first of the two pixels interpolated
+  double ratio;  // weight of `index`
+};
+
+Tap tap_for(double src, int size) {
+  const int pixel = static_cast<int>(src + 1e-10);
+  const bool inside = src >= 0 && pixel < size;
+  int index = static_cast<int>(std::floor(src - 0.5));
+  double ratio = 1.5 - (src - index);
+  if (index == -1) {  // GDAL clamps the first half pixel onto pixel 0
+    index = 0;
+    ratio = 1;
+  }
+  return {inside, pixel, index, ratio};
+}
+
+}  // namespace
+
+std::optional<DirectResampler> DirectResampler::create(GDALDatasetH ds,
+                                                       double destination_spacing) {
+  DirectResampler r;
+  if (GDALGetRasterCount(ds) != 1 || GDALGetGeoTransform(ds, r.gt_) != CE_None) return std::nullopt;
+  if (r.gt_[2] != 0 || r.gt_[4] != 0 || r.gt_[1] <= 0 || r.gt_[5] >= 0) return std::nullopt;
+  if (!is_wgs84_lon_lat(ds)) return std::nullopt;
+  r.width_ = GDALGetRasterXSize(ds);
+  r.height_ = GDALGetRasterYSize(ds);
+  const double west = r.gt_[0], east = west + r.width_ * r.gt_[1];
+  if (west < -180.0 - 1e-9 || east > 180.0 + 1e-9) return std::nullopt;
+  // Upsampling (or equal spacing) only: GDAL's plain 2 x 2 kernel.
+  if (std::min(r.gt_[1], -r.gt_[5]) < destination_spacing * (1 - 1e-12)) return std::nullopt;
+  int has = 0;
+  GDALRasterBandH band = GDALGetRasterBand(ds, 1);
+  r.nodata_ = GDALGetRasterNoDataValue(band, &has);
+  r.has_nodata_ = has != 0;
+  r.ds_ = ds;
+  return r;
+}
+
+Status DirectResampler::resample(const geo::TileGrid& grid, const geo::TileKey& key,
+                                 tiles::Raster& tile) const {
+  const int w = grid.width(), h = grid.height();
+  std::vector<Tap> cols(static_cast<size_t>(w)), rows(static_cast<size_t>(h));
+  for (int i = 0; i < w; ++i) {
+    cols[i] = tap_for((grid.sample_lon(key, i) - gt_[0]) / gt_[1], width_);
+  }
+  for (int j = 0; j < h; ++j) {
+    rows[j] = tap_for((grid.sample_lat(key, j) - gt_[3]) / gt_[5], height_);
+  }
+  // Source window needed by the taps, clipped to the raster.
+  const int x0 = std::max(0, cols.front().index), x1 = std::min(width_ - 1, cols.back().index + 1);
+  const int y0 = std::max(0, rows.front().index), y1 = std::min(height_ - 1, rows.back().index + 1);
+  if (x0 > x1 || y0 > y1) return {};
+  const int ww = x1 - x0 + 1, wh = y1 - y0 + 1;
+  std::vector<double> src(static_cast<size_t>(ww) * static_cast<size_t>(wh));
+  if (GDALRasterIO(GDALGetRasterBand(ds_, 1), GF_Read, x0, y0, ww, wh, src.data(), ww, wh,
+                   GDT_Float64, 0, 0) != CE_None) {
+    return fail(fmt::format("tile {}: {}", key.to_string(), gdal_error("source read failed")));
+  }
+  // Valid and inside the raster; outside the window means outside the raster.
+  auto sample = [&](int x, int y, double& v) {
+    if (x < x0 || x > x1 || y < y0 || y > y1) return false;
+    v = src[static_cast<size_t>(y - y0) * static_cast<size_t>(ww) + static_cast<size_t>(x - x0)];
+    return !std::isnan(v) && !(has_nodata_ && v == nodata_);
+  };
+  auto out = tile.f32();
+  for (int j = 0; j < h; ++j) {
+    const Tap ty = rows[j];
+    if (!ty.inside) continue;
+    for (int i = 0; i < w; ++i) {
+      const Tap tx = cols[i];
+      if (!tx.inside) continue;
+      double divisor = 0, sum = 0, v = 0;
+      if (!sample(tx.pixel, ty.pixel, v)) continue;
+      // Same order of accumulation as GDAL: upper left, upper right, lower left, lower right.
+      const double m_ul = tx.ratio * ty.ratio, m_ur = (1.0 - tx.ratio) * ty.ratio;
+      const double m_ll = tx.ratio * (1.0 - ty.ratio), m_lr = (1.0 - tx.ratio) * (1.0 - ty.ratio);
+      if (sample(tx.index, ty.index, v)) divisor += m_ul, sum += v * m_ul;
+      if (sample(tx.index + 1, ty.index, v)) divisor += m_ur, sum += v * m_ur;
+      if (sample(tx.index, ty.index + 1, v)) divisor += m_ll, sum += v * m_ll;
+      if (sample(tx.index + 1, ty.index + 1, v)) divisor += m_lr, sum += v * m_lr;
+      if (divisor < 0.00001) continue;
+      out[static_cast<size_t>(j) * static_cast<size_t>(w) + static_cast<size_t>(i)] =
+          static_cast<float>(divisor == 1.0 ? sum : sum / divisor);
+    }
+  }
+  return {};
+}
+
+}  // namespace relief::ingest

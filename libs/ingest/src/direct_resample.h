@@ -1,0 +1,39 @@
+#pragma once
+// A fast path for the most common elevation input: rasters already on a
+// north-up WGS84 longitude/latitude grid (SRTM, Copernicus DEM, most global
+// DEMs). Reprojection is then an axis-aligned affine map, so the source pixel
+// column depends only on the destination column and the row only on the row;
+// bilinear weights are computed once per column and per row instead of per
+// sample. The arithmetic follows GDAL's warp kernel exactly (only points inside
+// the raster whose own source pixel is valid; weights of valid neighbours
+// renormalised, invalid below a total weight of 1e-5; the same accumulation
+// order), so the result equals GDAL's warper's to the last bit or two.
+#include <optional>
+
+#include "gdal_env.h"
+#include "relief/base/result.h"
+#include "relief/geo/tile_grid.h"
+#include "relief/tiles/raster.h"
+
+namespace relief::ingest {
+
+class DirectResampler {
+ public:
+  // nullopt when `ds` does not qualify: not one band, not north-up, not WGS84
+  // geographic with longitude first, outside -180..180, or coarser than the
+  // destination (GDAL then widens its kernel, which this path does not do).
+  static std::optional<DirectResampler> create(GDALDatasetH ds, double destination_spacing);
+
+  // Paints the valid bilinear samples of the source over `tile` (the interior
+  // of `key`), leaving the others untouched, as GDAL mosaics sources.
+  Status resample(const geo::TileGrid& grid, const geo::TileKey& key, tiles::Raster& tile) const;
+
+ private:
+  GDALDatasetH ds_ = nullptr;
+  double gt_[6] = {};
+  int width_ = 0, height_ = 0;
+  bool has_nodata_ = false;
+  double nodata_ = 0;
+};
+
+}  // namespace relief::ingest
