@@ -37,7 +37,7 @@ struct BuildOptions {
   uint64_t memory_budget = uint64_t{1} << 30;
   bool overwrite = false;
   std::optional<std::string> src_crs;  // for inputs without a CRS
-  double warp_error = 0.125;  // approximate-transform error in source pixels (gdalwarp -et)
+  double warp_error = 0.125;      // approximate-transform error in source pixels (gdalwarp -et)
   bool direct_resampling = true;  // fast path for WGS84 lon/lat inputs (same result as GDAL)
 };
 
