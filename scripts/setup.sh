@@ -3,7 +3,7 @@
 set -euo pipefail
 packages=(
   build-essential cmake ninja-build ccache pkg-config git zip clang-format time python3
-  libgdal-dev gdal-bin
+  libgdal-dev gdal-bin python3-gdal
   libzstd-dev liblerc-dev libpng-dev libturbojpeg0-dev libwebp-dev
   nlohmann-json3-dev libfmt-dev libgtest-dev
 )

@@ -160,3 +160,40 @@ TEST(Seams, GlobalImageryWrapsAcrossTheAntimeridian) {
 
 }  // namespace
 }  // namespace relief::testing
+
+namespace relief::testing {
+namespace {
+
+// Other tile shapes and borders keep every property: 128 x 64 tiles with a
+// 2-sample border, and no border at all.
+TEST(Seams, NonDefaultTileSizeAndBorder) {
+  for (int border : {2, 0}) {
+    SCOPED_TRACE(border);
+    ingest::BuildOptions o;
+    o.inputs = {data("srtm/N42E001.hgt.zip")};
+    o.kind = tiles::DatasetKind::Elevation;
+    o.tile_log2_height = 6;
+    o.border = border;
+    const auto& store = built_store("small_tiles_b" + std::to_string(border), o);
+    EXPECT_EQ(store.grid().width(), 128);
+    EXPECT_EQ(store.grid().height(), 64);
+    EXPECT_EQ(store.manifest().max_level, 12);  // 4x smaller tiles: two more levels
+    for (int level = 0; level <= 12; ++level) check_borders(store, level);
+    // Same samples as the default layout: the sample lattice depends only on spacing.
+    const auto& reference = pyrenees_store();
+    for (double lon = 1.05; lon < 2.0; lon += 0.1) {
+      for (double lat = 42.05; lat < 43.0; lat += 0.1) {
+        auto a = store.sample(lon, lat, 12);
+        auto b = reference.sample(lon, lat, 10);
+        ASSERT_TRUE(a && b);
+        ASSERT_EQ(a->has_value(), b->has_value()) << lon << "," << lat;
+        if (a->has_value()) {
+          EXPECT_FLOAT_EQ(**a, **b) << lon << "," << lat;
+        }
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace relief::testing
