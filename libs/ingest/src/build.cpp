@@ -504,9 +504,14 @@ Result<BuildReport> build_store(const BuildOptions& o, Executor& executor, Progr
   const MemoryPlan memory = RELIEF_TRY(plan_memory(o.memory_budget, executor.concurrency()));
   init_gdal();
   GDALSetCacheMax64(static_cast<GIntBig>(memory.gdal_cache));
+  // Opening thousands of inputs (a continent of SRTM tiles) is worth doing in
+  // parallel; the first bad input in command-line order is the one reported.
+  std::vector<std::optional<Result<Source>>> described(o.inputs.size());
+  executor.parallel_for(o.inputs.size(), [&](size_t i) {
+    described[i] = describe_source(o.inputs[i], o.kind, o.src_crs);
+  });
   std::vector<Source> sources;
-  for (const auto& input : o.inputs)
-    sources.push_back(RELIEF_TRY(describe_source(input, o.kind, o.src_crs)));
+  for (auto& d : described) sources.push_back(RELIEF_TRY(std::move(*d)));
   RELIEF_CHECK(check_compatible(sources));
 
   double finest_spacing = std::numeric_limits<double>::infinity();
