@@ -3,8 +3,6 @@
 #include <string>
 #include <vector>
 
-#include "relief/geo/tile_key.h"
-
 namespace relief::testing {
 
 // A whole raster band read through GDAL, with its geotransform and nodata.

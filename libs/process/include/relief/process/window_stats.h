@@ -1,0 +1,27 @@
+#pragma once
+// Sum, sum of squares and count of the valid (non-NaN) samples in the square
+// window of radius r around every output sample, computed separably: column
+// sums over 2r+1 rows, then row sums of those over 2r+1 columns.
+//
+// Every window is summed afresh in a fixed order (not with running sums,
+// whose rounding would depend on where a run started), so the statistics of a
+// sample depend only on the input around it: a quad processed with its border
+// gives bit for bit the values of the whole image (see view.h).
+#include <vector>
+
+#include "relief/process/view.h"
+
+namespace relief::process {
+
+struct WindowStats {
+  int width = 0, height = 0;
+  std::vector<double> sum, sum_sq, count;
+  size_t index(int x, int y) const {
+    return static_cast<size_t>(y) * static_cast<size_t>(width) + static_cast<size_t>(x);
+  }
+};
+
+// Output covers the input view shrunk by `radius` on every side.
+WindowStats window_stats(ConstView input, int radius);
+
+}  // namespace relief::process

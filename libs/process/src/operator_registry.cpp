@@ -1,0 +1,129 @@
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "relief/process/operators.h"
+#include "relief/process/speckle.h"
+
+namespace relief::process {
+namespace {
+
+const ParamSpec kRadius{"radius", 1,    9,
+                        1,        true, "window radius in samples: (2r+1)^2 masks up to 19 x 19"};
+const ParamSpec kLooks{"looks", 1, 100, 1, false, "equivalent number of looks L (Cu^2 = 1/L)"};
+const ParamSpec kDeramp{"deramp", 0, 10, 0.1, false, "damping factor of the exponential kernel"};
+const ParamSpec kSigma{"sigma", 0, 10, 0, false, "standard deviation in samples (0: radius / 2.5)"};
+
+using Filter = void (*)(ConstView, MutView, const SpeckleParams&, int, int);
+
+struct Entry {
+  OperatorSpec spec;
+  Filter filter;
+};
+
+const std::vector<Entry>& entries() {
+  static const std::vector<Entry> list = {
+      {{"mean", "mean of the window", "any", {kRadius}}, mean_filter},
+      {{"gauss", "Gaussian smoothing (separable)", "any", {kRadius, kSigma}}, gauss_filter},
+      {{"median", "median of the window; separable approximation above radius 3", "any", {kRadius}},
+       median_filter},
+      {{"lee", "Lee MMSE speckle filter", "SAR amplitude, linear", {kRadius, kLooks}}, lee_filter},
+      {{"kuan", "Kuan speckle filter", "SAR amplitude, linear", {kRadius, kLooks}}, kuan_filter},
+      {{"frost",
+        "Frost speckle filter (exponential kernel)",
+        "SAR amplitude, linear",
+        {kRadius, kDeramp}},
+       frost_filter},
+      {{"gamma-map",
+        "Gamma maximum a posteriori speckle filter",
+        "SAR amplitude, linear",
+        {kRadius, kLooks}},
+       gamma_map_filter},
+  };
+  return list;
+}
+
+const Entry* find_entry(const std::string& name) {
+  for (const auto& e : entries()) {
+    if (e.spec.name == name) return &e;
+  }
+  return nullptr;
+}
+
+}  // namespace
+
+const std::vector<OperatorSpec>& operator_catalogue() {
+  static const std::vector<OperatorSpec> specs = [] {
+    std::vector<OperatorSpec> s;
+    for (const auto& e : entries()) s.push_back(e.spec);
+    return s;
+  }();
+  return specs;
+}
+
+const OperatorSpec* find_operator(const std::string& name) {
+  const Entry* e = find_entry(name);
+  return e ? &e->spec : nullptr;
+}
+
+Result<Params> parse_params(const OperatorSpec& op, const std::vector<std::string>& assignments) {
+  Params params;
+  for (const auto& p : op.params) params[p.name] = p.default_value;
+  for (const auto& a : assignments) {
+    const auto eq = a.find('=');
+    if (eq == std::string::npos) {
+      return fail(fmt::format("--param: '{}' is not key=value", a));
+    }
+    const std::string key = a.substr(0, eq), text = a.substr(eq + 1);
+    auto spec = std::find_if(op.params.begin(), op.params.end(),
+                             [&](const ParamSpec& p) { return p.name == key; });
+    if (spec == op.params.end()) {
+      return fail(fmt::format("--param: operator {} has no parameter '{}'", op.name, key));
+    }
+    double value = 0;
+    auto [ptr, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+    if (ec != std::errc() || ptr != text.data() + text.size() || !std::isfinite(value)) {
+      return fail(fmt::format("--param: {}='{}' is not a number", key, text));
+    }
+    if (spec->integer && value != std::floor(value)) {
+      return fail(fmt::format("--param: {}={} must be a whole number", key, text));
+    }
+    if (value < spec->min || value > spec->max) {
+      return fail(
+          fmt::format("--param: {}={} is out of range [{}, {}]", key, text, spec->min, spec->max));
+    }
+    params[key] = value;
+  }
+  return params;
+}
+
+int margin_of(const OperatorSpec&, const Params& params) {
+  auto it = params.find("radius");
+  return it == params.end() ? 0 : static_cast<int>(it->second);
+}
+
+Status run_operator(const OperatorSpec& op, const Params& params, ConstView input, MutView output,
+                    Executor& executor) {
+  const Entry* e = find_entry(op.name);
+  assert(e);
+  const int m = margin_of(op, params);
+  if (input.width != output.width + 2 * m || input.height != output.height + 2 * m) {
+    return fail(fmt::format("{}: input must extend {} samples beyond the output", op.name, m));
+  }
+  SpeckleParams sp;
+  sp.radius = m;
+  if (auto it = params.find("looks"); it != params.end()) sp.looks = it->second;
+  if (auto it = params.find("deramp"); it != params.end()) sp.deramp = it->second;
+  if (auto it = params.find("sigma"); it != params.end()) sp.sigma = it->second;
+  constexpr int kRowsPerTask = 32;
+  const int tasks = (output.height + kRowsPerTask - 1) / kRowsPerTask;
+  executor.parallel_for(static_cast<size_t>(tasks), [&](size_t t) {
+    const int y0 = static_cast<int>(t) * kRowsPerTask;
+    e->filter(input, output, sp, y0, std::min(output.height, y0 + kRowsPerTask));
+  });
+  return {};
+}
+
+}  // namespace relief::process

@@ -1,0 +1,198 @@
+// Speckle filters: known answers, an independent scalar reference written from
+// the formulas, quad-by-quad equals whole image bit for bit, and bad parameters.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <random>
+
+#include "../ingest/gdal_reference.h"
+#include "../support/test_support.h"
+#include "relief/process/operators.h"
+
+namespace relief::process {
+namespace {
+
+using relief::testing::data;
+
+struct Image {
+  int width = 0, height = 0;
+  std::vector<float> v;
+  MutView view() { return {v.data(), width, height, width, 0, 0}; }
+  ConstView cview() const { return {v.data(), width, height, width, 0, 0}; }
+};
+
+Image umbra_crop(int x0, int y0, int w, int h) {
+  const auto src = relief::testing::read_source(data("sar/umbra_mount_yasur.tif"));
+  Image img{w, h, std::vector<float>(static_cast<size_t>(w) * h)};
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) img.v[y * w + x] = static_cast<float>(src.at(x0 + x, y0 + y));
+  }
+  return img;
+}
+
+Image run(const std::string& name, const std::vector<std::string>& params, const Image& in,
+          Executor& ex) {
+  const OperatorSpec* op = find_operator(name);
+  EXPECT_NE(op, nullptr) << name;
+  auto p = parse_params(*op, params);
+  EXPECT_TRUE(p) << p.error().message;
+  const int m = margin_of(*op, *p);
+  Image out{in.width - 2 * m, in.height - 2 * m, {}};
+  out.v.resize(static_cast<size_t>(out.width) * out.height);
+  auto st = run_operator(*op, *p, in.cview(), out.view(), ex);
+  EXPECT_TRUE(st) << st.error().message;
+  return out;
+}
+
+// --- an independent scalar reference, straight from the formulas -----------
+
+double reference(const std::string& name, const Image& in, int x, int y, int r, double looks,
+                 double deramp) {
+  std::vector<double> win;
+  for (int dy = -r; dy <= r; ++dy) {
+    for (int dx = -r; dx <= r; ++dx) win.push_back(in.v[(y + dy) * in.width + x + dx]);
+  }
+  const double n = static_cast<double>(win.size());
+  double mean = 0;
+  for (double v : win) mean += v;
+  mean /= n;
+  double var = 0;
+  for (double v : win) var += (v - mean) * (v - mean);
+  var /= n - 1;
+  const double i = in.v[y * in.width + x];
+  if (name == "mean") return mean;
+  if (std::abs(mean) < 1e-10) return 0;
+  if (std::abs(var) < 1e-10) return mean;
+  const double ci2 = var / (mean * mean), cu2 = 1 / looks;
+  // Integer amplitudes can put Ci^2 exactly on a threshold, where rounding in
+  // either implementation picks a branch: such samples are not comparable.
+  auto near = [](double a, double b) { return std::abs(a - b) <= 1e-9 * std::abs(b); };
+  if (name != "frost" && (near(ci2, cu2) || near(ci2, 2 * cu2))) return NAN;
+  if (name == "frost") {
+    const double alpha = deramp * var / (mean * mean);
+    double norm = 0, acc = 0;
+    for (int dy = -r; dy <= r; ++dy) {
+      for (int dx = -r; dx <= r; ++dx) {
+        const double c = std::exp(-alpha * std::sqrt(dx * dx + dy * dy));
+        norm += c;
+        acc += c * in.v[(y + dy) * in.width + x + dx];
+      }
+    }
+    return acc / norm;
+  }
+  if (ci2 < cu2) return mean;
+  if (name == "lee") return i * (1 - cu2 / ci2) + mean * (cu2 / ci2);
+  if (name == "kuan") {
+    const double w = (1 - cu2 / ci2) / (1 + cu2);
+    return i * w + mean * (1 - w);
+  }
+  // gamma-map
+  if (std::sqrt(ci2) >= std::sqrt(2 * cu2)) return i;
+  const double alpha = (1 + cu2) / (ci2 - cu2), b = alpha - looks - 1;
+  return (b * mean + std::sqrt(mean * mean * b * b + 4 * alpha * looks * mean * i)) / (2 * alpha);
+}
+
+TEST(Speckle, MatchesScalarReferenceOnRealSar) {
+  const Image in = umbra_crop(700, 900, 160, 120);
+  ThreadExecutor ex(2);
+  for (const char* name : {"mean", "lee", "kuan", "gamma-map", "frost"}) {
+    for (int r : {1, 2, 5}) {
+      SCOPED_TRACE(std::string(name) + " r=" + std::to_string(r));
+      std::vector<std::string> params = {"radius=" + std::to_string(r)};
+      const double looks = std::string(name) == "frost" || std::string(name) == "mean" ? 1 : 2;
+      if (looks != 1) params.push_back("looks=2");
+      const Image out = run(name, params, in, ex);
+      double worst = 0;
+      for (int y = 0; y < out.height; ++y) {
+        for (int x = 0; x < out.width; ++x) {
+          const double ref = reference(name, in, x + r, y + r, r, looks, 0.1);
+          if (std::isnan(ref)) continue;
+          const double got = out.v[y * out.width + x];
+          worst = std::max(worst, std::abs(got - ref) / std::max(1.0, std::abs(ref)));
+        }
+      }
+      EXPECT_LE(worst, 1e-5);
+    }
+  }
+}
+
+TEST(Speckle, ConstantImageIsReturnedUnchanged) {
+  Image in{40, 30, std::vector<float>(1200, 42.5f)};
+  InlineExecutor ex;
+  for (const auto& op : operator_catalogue()) {
+    const Image out = run(op.name, {"radius=3"}, in, ex);
+    for (float v : out.v) ASSERT_FLOAT_EQ(v, 42.5f) << op.name;
+  }
+}
+
+TEST(Speckle, QuadByQuadWithBordersEqualsWholeImageBitForBit) {
+  const Image in = umbra_crop(300, 400, 300, 260);
+  ThreadExecutor ex(2);
+  for (const auto& op : operator_catalogue()) {
+    for (int r : {2, 5}) {
+      SCOPED_TRACE(op.name + " r=" + std::to_string(r));
+      const std::vector<std::string> params = {"radius=" + std::to_string(r)};
+      const Image whole = run(op.name, params, in, ex);
+      // Quads of 64 x 48 output samples at arbitrary offsets, each with its border.
+      for (int qy = 0; qy < whole.height; qy += 48) {
+        for (int qx = 0; qx < whole.width; qx += 64) {
+          const int w = std::min(64, whole.width - qx), h = std::min(48, whole.height - qy);
+          Image quad_in{w + 2 * r, h + 2 * r, {}};
+          for (int y = 0; y < quad_in.height; ++y) {
+            for (int x = 0; x < quad_in.width; ++x)
+              quad_in.v.push_back(in.v[(qy + y) * in.width + qx + x]);
+          }
+          const Image quad = run(op.name, params, quad_in, ex);
+          for (int y = 0; y < h; ++y) {
+            ASSERT_EQ(std::memcmp(&quad.v[y * w], &whole.v[(qy + y) * whole.width + qx],
+                                  w * sizeof(float)),
+                      0)
+                << "quad at " << qx << "," << qy << " row " << y;
+          }
+        }
+      }
+    }
+  }
+}
+
+TEST(Speckle, NodataIsLeftOutAndKept) {
+  Image in{9, 9, std::vector<float>(81, 10.0f)};
+  in.v[4 * 9 + 4] = NAN;  // centre
+  in.v[4 * 9 + 5] = 1000.0f;
+  in.v[3 * 9 + 3] = NAN;
+  InlineExecutor ex;
+  const Image mean = run("mean", {"radius=1"}, in, ex);  // 7 x 7 output
+  EXPECT_TRUE(std::isnan(mean.v[3 * 7 + 3]));            // NaN centre stays NaN
+  // Output (3, 2) is input (4, 3): its window holds both NaNs, left out.
+  EXPECT_FLOAT_EQ(mean.v[2 * 7 + 3], (6 * 10.0f + 1000.0f) / 7);
+  for (float v : run("median", {"radius=1"}, in, ex).v) {
+    if (!std::isnan(v)) {
+      EXPECT_EQ(v, 10.0f);
+    }
+  }
+}
+
+TEST(Speckle, BadParametersAreErrors) {
+  const OperatorSpec* lee = find_operator("lee");
+  ASSERT_NE(lee, nullptr);
+  EXPECT_EQ(find_operator("sharpen"), nullptr);
+  auto expect_error = [&](std::vector<std::string> p, const std::string& needle) {
+    auto r = parse_params(*lee, p);
+    ASSERT_FALSE(r);
+    EXPECT_NE(r.error().message.find(needle), std::string::npos) << r.error().message;
+  };
+  expect_error({"radius=0"}, "out of range");
+  expect_error({"radius=10"}, "out of range");
+  expect_error({"radius=2.5"}, "whole number");
+  expect_error({"looks=abc"}, "not a number");
+  expect_error({"deramp=1"}, "no parameter 'deramp'");
+  expect_error({"radius"}, "key=value");
+  auto ok = parse_params(*lee, {"radius=4", "looks=3"});
+  ASSERT_TRUE(ok);
+  EXPECT_EQ(ok->at("radius"), 4);
+  EXPECT_EQ(margin_of(*lee, *ok), 4);
+}
+
+}  // namespace
+}  // namespace relief::process
