@@ -6,6 +6,7 @@ packages=(
   libgdal-dev gdal-bin python3-gdal
   libzstd-dev liblerc-dev libpng-dev libturbojpeg0-dev libwebp-dev
   nlohmann-json3-dev libfmt-dev libgtest-dev
+  otb-bin
 )
 missing=()
 for p in "${packages[@]}"; do

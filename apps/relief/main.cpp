@@ -18,6 +18,7 @@ commands:
   info     describe a store: manifest, tiles and bytes per level, compression
   verify   check every tile header and checksum of a store
   export   reassemble one level of a store into a GeoTIFF
+  process  run a raster operator (speckle filters, ...) over a GeoTIFF
 
 Run 'relief <command> --help' for the options of a command.
 )";
@@ -60,6 +61,7 @@ int main(int argc, char** argv) {
     if (command == "info") return relief::cli::run_info(args);
     if (command == "verify") return relief::cli::run_verify(args);
     if (command == "export") return relief::cli::run_export(args);
+    if (command == "process") return relief::cli::run_process(args);
     if (command == "--version") {
       std::puts("relief 0.1.0");
       return 0;

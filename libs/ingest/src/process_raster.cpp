@@ -1,0 +1,127 @@
+#include "relief/ingest/process_raster.h"
+
+#include <cpl_conv.h>
+#include <gdal.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+
+#include <fmt/format.h>
+
+#include "gdal_env.h"
+#include "relief/base/file_io.h"
+#include "relief/process/operators.h"
+
+namespace relief::ingest {
+
+Result<ProcessRasterReport> process_raster(const ProcessRasterOptions& o, Executor& executor,
+                                           Progress& progress) {
+  const auto start = std::chrono::steady_clock::now();
+  const process::OperatorSpec* op = process::find_operator(o.op);
+  if (!op)
+    return fail(fmt::format("--op: unknown operator '{}' (see relief process --list)", o.op));
+  const process::Params params = RELIEF_TRY(process::parse_params(*op, o.params));
+  const int margin = process::margin_of(*op, params);
+
+  std::error_code ec;
+  if (std::filesystem::is_directory(o.input, ec)) {
+    return fail(
+        fmt::format("{}: is a directory; relief process reads rasters (processing stores "
+                    "is not available yet)",
+                    o.input));
+  }
+  Dataset in = open_raster(o.input);
+  if (!in) return fail(fmt::format("{}: {}", o.input, gdal_error("not a raster GDAL can read")));
+  if (GDALGetRasterCount(in.get()) != 1) {
+    return fail(fmt::format("{}: has {} bands; operators work on one band", o.input,
+                            GDALGetRasterCount(in.get())));
+  }
+  GDALRasterBandH band = GDALGetRasterBand(in.get(), 1);
+  if (GDALDataTypeIsComplex(GDALGetRasterDataType(band))) {
+    return fail(fmt::format("{}: unsupported data type {} (complex; convert to amplitude first)",
+                            o.input, GDALGetDataTypeName(GDALGetRasterDataType(band))));
+  }
+  const int width = GDALGetRasterXSize(in.get()), height = GDALGetRasterYSize(in.get());
+  int has_nodata = 0;
+  const double nodata = GDALGetRasterNoDataValue(band, &has_nodata);
+
+  // Strips of output rows sized so input and output buffers use at most half
+  // the budget (GDAL's cache takes an eighth).
+  GDALSetCacheMax64(static_cast<GIntBig>(o.memory_budget / 8));
+  const uint64_t row_bytes = static_cast<uint64_t>(width + 2 * margin) * 4 * 2;
+  const int strip =
+      static_cast<int>(std::clamp<uint64_t>(o.memory_budget / 2 / row_bytes, 16, 4096));
+
+  const std::string tmp = o.output.string() + std::string(kTempMarker) + std::to_string(::getpid());
+  const char* create_options[] = {"TILED=YES", "COMPRESS=DEFLATE", "PREDICTOR=3",
+                                  "BIGTIFF=IF_SAFER", nullptr};
+  Dataset out(GDALCreate(GDALGetDriverByName("GTiff"), tmp.c_str(), width, height, 1, GDT_Float32,
+                         const_cast<char**>(create_options)));
+  if (!out)
+    return fail(fmt::format("{}: cannot create: {}", o.output.string(), gdal_error("GTiff")));
+  double gt[6];
+  if (GDALGetGeoTransform(in.get(), gt) == CE_None) GDALSetGeoTransform(out.get(), gt);
+  GDALSetProjection(out.get(), GDALGetProjectionRef(in.get()));
+  GDALRasterBandH out_band = GDALGetRasterBand(out.get(), 1);
+  GDALSetRasterNoDataValue(out_band, std::numeric_limits<double>::quiet_NaN());
+  auto discard = [&](std::string message) -> Result<ProcessRasterReport> {
+    out.reset();
+    ::unlink(tmp.c_str());
+    return fail(std::move(message));
+  };
+
+  const int padded_width = width + 2 * margin;
+  std::vector<float> input_rows, output_rows;
+  progress.begin(fmt::format("{} r={}", op->name, margin), static_cast<uint64_t>(height));
+  for (int y0 = 0; y0 < height; y0 += strip) {
+    const int rows = std::min(strip, height - y0);
+    // Input rows [y0 - margin, y0 + rows + margin); outside the image is nodata.
+    input_rows.assign(static_cast<size_t>(padded_width) * (rows + 2 * margin),
+                      std::numeric_limits<float>::quiet_NaN());
+    const int read0 = std::max(0, y0 - margin), read1 = std::min(height, y0 + rows + margin);
+    float* dst =
+        input_rows.data() + static_cast<size_t>(read0 - (y0 - margin)) * padded_width + margin;
+    if (GDALRasterIO(band, GF_Read, 0, read0, width, read1 - read0, dst, width, read1 - read0,
+                     GDT_Float32, 0, static_cast<GSpacing>(padded_width) * 4) != CE_None) {
+      return discard(fmt::format("{}: read failed: {}", o.input, gdal_error("GDAL")));
+    }
+    if (has_nodata) {
+      const float nd = static_cast<float>(nodata);
+      for (float& v : input_rows) {
+        if (v == nd) v = std::numeric_limits<float>::quiet_NaN();
+      }
+    }
+    output_rows.resize(static_cast<size_t>(width) * rows);
+    const process::ConstView in_view{input_rows.data(), padded_width, rows + 2 * margin,
+                                     padded_width,      -margin,      y0 - margin};
+    const process::MutView out_view{output_rows.data(), width, rows, width, 0, y0};
+    if (auto st = process::run_operator(*op, params, in_view, out_view, executor); !st) {
+      return discard(st.error().message);
+    }
+    if (GDALRasterIO(out_band, GF_Write, 0, y0, width, rows, output_rows.data(), width, rows,
+                     GDT_Float32, 0, 0) != CE_None) {
+      return discard(fmt::format("{}: write failed: {}", o.output.string(), gdal_error("GTiff")));
+    }
+    progress.advance(static_cast<uint64_t>(rows));
+  }
+  progress.end();
+  CPLErrorReset();
+  GDALClose(out.release());
+  if (CPLGetLastErrorType() >= CE_Failure) {
+    ::unlink(tmp.c_str());
+    return fail(fmt::format("{}: write failed: {}", o.output.string(), gdal_error("GTiff")));
+  }
+  if (::rename(tmp.c_str(), o.output.c_str()) != 0) {
+    ::unlink(tmp.c_str());
+    return fail(
+        fmt::format("{}: cannot rename into place: {}", o.output.string(), errno_text(errno)));
+  }
+  return ProcessRasterReport{
+      width, height,
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()};
+}
+
+}  // namespace relief::ingest
