@@ -24,6 +24,7 @@ options:
   --op NAME            operator (see --list)
   --param key=value    operator parameter; repeat for several
   --list               list every operator with its parameters, ranges and defaults
+  --compress NAME      output compression: none (default, as GDAL and OTB), deflate, zstd
   --memory SIZE        memory budget (default 1GiB)
   --threads N          worker threads (default: one per core)
   -q, --quiet          no progress bar
@@ -61,6 +62,7 @@ int run_process(const std::vector<std::string>& argv) {
                            {"--op"},
                            {"--list", "", false},
                            {"--memory"},
+                           {"--compress"},
                            {"--threads"},
                            {"--quiet", "-q", false}},
                           "process");
@@ -74,6 +76,7 @@ int run_process(const std::vector<std::string>& argv) {
   o.output = *args->get("--output");
   o.op = *args->get("--op");
   o.params = params;
+  if (auto c = args->get("--compress")) o.compress = *c;
   if (auto m = args->get("--memory")) {
     auto bytes = parse_byte_size(*m);
     if (!bytes) return report_error("--memory: " + bytes.error().message);

@@ -85,6 +85,7 @@ TEST(Process, BadInputsAreOneLineErrors) {
   expect_error({"process", data("imagery/RGB.byte.tif"), "-o", out, "--op", "lee"}, "3 bands");
   expect_error({"process", sar, "-o", "/proc/relief/o.tif", "--op", "lee"}, "/proc/relief/o.tif");
   expect_error({"process", dir.path().string(), "-o", out, "--op", "lee"}, "is a directory");
+  expect_error({"process", sar, "-o", out, "--op", "lee", "--compress", "lzw"}, "--compress");
   auto list = run_relief({"process", "--list"});
   EXPECT_EQ(list.exit_code, 0);
   for (const char* op : {"lee", "kuan", "frost", "gamma-map", "median", "gauss", "mean"}) {

@@ -56,7 +56,13 @@ Result<ProcessRasterReport> process_raster(const ProcessRasterOptions& o, Execut
       static_cast<int>(std::clamp<uint64_t>(o.memory_budget / 2 / row_bytes, 16, 4096));
 
   const std::string tmp = o.output.string() + std::string(kTempMarker) + std::to_string(::getpid());
-  const char* create_options[] = {"TILED=YES", "COMPRESS=DEFLATE", "PREDICTOR=3",
+  if (o.compress != "none" && o.compress != "deflate" && o.compress != "zstd") {
+    return fail(fmt::format("--compress: '{}' is not none, deflate or zstd", o.compress));
+  }
+  const std::string compress =
+      "COMPRESS=" + (o.compress == "none" ? std::string("NONE") : o.compress);
+  const char* create_options[] = {"TILED=YES", compress.c_str(),
+                                  o.compress == "none" ? "PREDICTOR=1" : "PREDICTOR=3",
                                   "BIGTIFF=IF_SAFER", nullptr};
   Dataset out(GDALCreate(GDALGetDriverByName("GTiff"), tmp.c_str(), width, height, 1, GDT_Float32,
                          const_cast<char**>(create_options)));

@@ -76,7 +76,9 @@ void gamma_map_filter(ConstView in, MutView out, const SpeckleParams& p, int y0,
     if (std::abs(m) < kEpsilon) return 0.0;
     if (std::abs(var) < kEpsilon) return m;
     const double ci2 = var / (m * m);
-    if (ci2 < cu2) return m;
+    // At ci2 == cu2 alpha is infinite and the MAP estimate tends to the mean;
+    // OTB evaluates the formula there and returns NaN (see docs/process.md).
+    if (ci2 <= cu2) return m;
     if (std::sqrt(ci2) >= cmax) return i;  // a point target or an edge: keep it
     const double alpha = (1.0 + cu2) / (ci2 - cu2);
     const double b = alpha - looks - 1.0;

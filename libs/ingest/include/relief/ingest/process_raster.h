@@ -19,6 +19,7 @@ struct ProcessRasterOptions {
   std::string op;
   std::vector<std::string> params;  // "key=value"
   uint64_t memory_budget = uint64_t{1} << 30;
+  std::string compress = "none";  // GeoTIFF compression: none, deflate, zstd
 };
 
 struct ProcessRasterReport {

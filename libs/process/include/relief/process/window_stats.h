@@ -3,10 +3,12 @@
 // window of radius r around every output sample, computed separably: column
 // sums over 2r+1 rows, then row sums of those over 2r+1 columns.
 //
-// Every window is summed afresh in a fixed order (not with running sums,
-// whose rounding would depend on where a run started), so the statistics of a
-// sample depend only on the input around it: a quad processed with its border
-// gives bit for bit the values of the whole image (see view.h).
+// The statistics of a sample must depend only on the input around it, so that
+// a quad processed with its border gives bit for bit the values of the whole
+// image (see view.h). Integer-valued inputs (8- and 16-bit SAR amplitudes, the
+// common case) use running sums, O(1) per sample whatever the radius: their
+// sums are exact in double, so the order of additions cannot matter. Other
+// inputs sum every window afresh in a fixed order, O(r) per sample.
 #include <vector>
 
 #include "relief/process/view.h"
