@@ -9,6 +9,8 @@
 #include <map>
 #include <thread>
 
+#include <fstream>
+
 #include "relief/base/file_io.h"
 #include "test_support.h"
 
@@ -91,6 +93,9 @@ TEST(Resume, KilledBuildsResumeToTheSameStore) {
     ASSERT_GT(pid, 0);
     ASSERT_TRUE(kill_when(pid, [&] { return point.ready(out); }));
     EXPECT_FALSE(fs::exists(out / "manifest.json")) << "killed before completion";
+    // A write cut short leaves at most its temporary file, never a partial tile.
+    fs::create_directories(out / "11");
+    std::ofstream(out / "11" / ("000.rtile" + std::string(kTempMarker) + "1.0")) << "partial";
     // A plain `verify` refuses an incomplete store rather than trusting it.
     EXPECT_NE(run_relief({"verify", out.string(), "-q"}).exit_code, 0);
     auto resumed = run_relief(build_args(out.string()));

@@ -87,6 +87,21 @@ Status sync_filesystem(const fs::path& dir) {
   return {};
 }
 
+// A killed writer leaves its temporary file behind (never under a final name).
+Status remove_temporary_files(const fs::path& root) {
+  std::error_code ec;
+  std::vector<fs::path> stale;
+  for (auto it = fs::recursive_directory_iterator(root, ec);
+       !ec && it != fs::recursive_directory_iterator(); it.increment(ec)) {
+    if (it->is_regular_file() && is_temporary_file(it->path())) stale.push_back(it->path());
+  }
+  for (const auto& p : stale) {
+    if (!fs::remove(p, ec) && ec)
+      return fail(fmt::format("{}: cannot remove: {}", p.string(), ec.message()));
+  }
+  return {};
+}
+
 bool is_store_like(const fs::path& dir) {
   std::error_code ec;
   return fs::exists(dir / tiles::kManifestName, ec) || fs::exists(dir / kBuildDir / kStateName, ec);
@@ -525,7 +540,7 @@ Result<BuildReport> build_store(const BuildOptions& o, Executor& executor, Progr
     return fail(fmt::format("--min-level: {} is not in 0..{}", min_level, max_level));
   }
   const std::string print = fingerprint(o, codec, min_level, max_level);
-  RELIEF_TRY(prepare_output(o, print));
+  if (RELIEF_TRY(prepare_output(o, print))) RELIEF_CHECK(remove_temporary_files(o.output));
   Builder builder(o, std::move(sources), *grid, codec, min_level, max_level, memory, executor,
                   progress);
   return builder.run();
