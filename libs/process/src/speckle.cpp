@@ -13,16 +13,18 @@ namespace {
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 constexpr double kEpsilon = 1e-10;  // as OTB: "zero" mean or variance
 
-// Window statistics for output rows [y0, y1) only.
-WindowStats stats_for_rows(ConstView in, MutView out, int r, int y0, int y1) {
-  return window_stats(in.window(0, y0, out.width + 2 * r, y1 - y0 + 2 * r), r);
+// Streams window sums over output rows [y0, y1).
+WindowSums sums_for_rows(ConstView in, MutView out, int r, int y0, int y1) {
+  return WindowSums(in.window(0, y0, out.width + 2 * r, y1 - y0 + 2 * r), r);
 }
 
 // Shared skeleton of the local-statistics filters: f(centre, mean, variance, n).
 template <class F>
 void local_stats_filter(ConstView in, MutView out, int r, int y0, int y1, F f) {
-  const WindowStats st = stats_for_rows(in, out, r, y0, y1);
+  WindowSums sums = sums_for_rows(in, out, r, y0, y1);
   for (int y = y0; y < y1; ++y) {
+    sums.next_row(y - y0);
+    const double *s = sums.sum(), *q = sums.sum_sq(), *c = sums.count();
     const float* src = in.row(y + r) + r;
     float* dst = out.row(y);
     for (int x = 0; x < out.width; ++x) {
@@ -31,10 +33,9 @@ void local_stats_filter(ConstView in, MutView out, int r, int y0, int y1, F f) {
         dst[x] = kNaN;
         continue;
       }
-      const size_t k = st.index(x, y - y0);
-      const double n = st.count[k];
-      const double mean = st.sum[k] / n;
-      const double var = n > 1 ? (st.sum_sq[k] - st.sum[k] * mean) / (n - 1) : 0.0;
+      const double n = c[x];
+      const double mean = s[x] / n;
+      const double var = n > 1 ? (q[x] - s[x] * mean) / (n - 1) : 0.0;
       dst[x] = static_cast<float>(f(static_cast<double>(centre), mean, std::max(0.0, var), n));
     }
   }
@@ -102,17 +103,18 @@ void frost_filter(ConstView in, MutView out, const SpeckleParams& p, int y0, int
     }
   }
   std::vector<double> weight(distances.size());
-  const WindowStats st = stats_for_rows(in, out, r, y0, y1);
+  WindowSums sums = sums_for_rows(in, out, r, y0, y1);
   for (int y = y0; y < y1; ++y) {
+    sums.next_row(y - y0);
     for (int x = 0; x < out.width; ++x) {
       const float centre = in.at(x + r, y + r);
       if (std::isnan(centre)) {
         out.at(x, y) = kNaN;
         continue;
       }
-      const size_t k = st.index(x, y - y0);
-      const double n = st.count[k], mean = st.sum[k] / n;
-      const double var = n > 1 ? std::max(0.0, (st.sum_sq[k] - st.sum[k] * mean) / (n - 1)) : 0.0;
+      const double n = sums.count()[x], mean = sums.sum()[x] / n;
+      const double var =
+          n > 1 ? std::max(0.0, (sums.sum_sq()[x] - sums.sum()[x] * mean) / (n - 1)) : 0.0;
       if (std::abs(mean) < kEpsilon) {
         out.at(x, y) = 0.0f;
         continue;

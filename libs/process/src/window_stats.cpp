@@ -1,14 +1,13 @@
 #include "relief/process/window_stats.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace relief::process {
-
 namespace {
 
 // Integers up to 2^20 keep every window sum of values and squares (at most
-// 19 x 19 of them) below 2^53, where doubles are exact: running sums then give
-// the same bits as direct sums in any order.
+// 19 x 19 of them) below 2^53, where doubles are exact.
 bool exact_integers(ConstView in) {
   constexpr float kLimit = 1 << 20;
   for (int y = 0; y < in.height; ++y) {
@@ -32,60 +31,59 @@ inline void accumulate(float v, double sign, double& s, double& q, double& c) {
 
 }  // namespace
 
-WindowStats window_stats(ConstView in, int radius) {
-  WindowStats st;
-  st.width = in.width - 2 * radius;
-  st.height = in.height - 2 * radius;
-  assert(st.width > 0 && st.height > 0);
-  const int len = 2 * radius + 1;
-  const bool running = exact_integers(in);
-  const size_t cols = static_cast<size_t>(in.width);
-  std::vector<double> vs(cols, 0.0), vq(cols, 0.0), vc(cols, 0.0);
-  st.sum.resize(static_cast<size_t>(st.width) * static_cast<size_t>(st.height));
-  st.sum_sq.resize(st.sum.size());
-  st.count.resize(st.sum.size());
-  for (int y = 0; y < st.height; ++y) {
-    // Pass 1: per column, the sums over input rows [y, y + 2r].
-    if (running && y > 0) {
-      const float* add = in.row(y + len - 1);
-      const float* drop = in.row(y - 1);
-      for (size_t x = 0; x < cols; ++x) {
-        accumulate(add[x], 1.0, vs[x], vq[x], vc[x]);
-        accumulate(drop[x], -1.0, vs[x], vq[x], vc[x]);
-      }
-    } else {
-      std::fill(vs.begin(), vs.end(), 0.0);
-      std::fill(vq.begin(), vq.end(), 0.0);
-      std::fill(vc.begin(), vc.end(), 0.0);
-      for (int k = 0; k < len; ++k) {
-        const float* row = in.row(y + k);
-        for (size_t x = 0; x < cols; ++x) accumulate(row[x], 1.0, vs[x], vq[x], vc[x]);
-      }
+WindowSums::WindowSums(ConstView in, int radius)
+    : in_(in),
+      radius_(radius),
+      width_(in.width - 2 * radius),
+      running_(exact_integers(in)),
+      vs_(static_cast<size_t>(in.width)),
+      vq_(vs_.size()),
+      vc_(vs_.size()),
+      sum_(static_cast<size_t>(std::max(0, width_))),
+      sum_sq_(sum_.size()),
+      count_(sum_.size()) {
+  assert(width_ > 0 && in.height > 2 * radius);
+}
+
+void WindowSums::next_row(int y) {
+  assert(y > last_row_ && y + 2 * radius_ < in_.height);
+  const int len = 2 * radius_ + 1;
+  const size_t cols = vs_.size();
+  if (running_ && last_row_ >= 0 && y == last_row_ + 1) {
+    const float* add = in_.row(y + len - 1);
+    const float* drop = in_.row(y - 1);
+    for (size_t x = 0; x < cols; ++x) {
+      accumulate(add[x], 1.0, vs_[x], vq_[x], vc_[x]);
+      accumulate(drop[x], -1.0, vs_[x], vq_[x], vc_[x]);
     }
-    // Pass 2: sums of those over columns [x, x + 2r].
-    double* os = &st.sum[st.index(0, y)];
-    double* oq = &st.sum_sq[st.index(0, y)];
-    double* oc = &st.count[st.index(0, y)];
-    double s = 0, q = 0, c = 0;
-    for (int x = 0; x < st.width; ++x) {
-      if (running && x > 0) {
-        s += vs[x + len - 1] - vs[x - 1];
-        q += vq[x + len - 1] - vq[x - 1];
-        c += vc[x + len - 1] - vc[x - 1];
-      } else {
-        s = q = c = 0;
-        for (int k = 0; k < len; ++k) {
-          s += vs[x + k];
-          q += vq[x + k];
-          c += vc[x + k];
-        }
-      }
-      os[x] = s;
-      oq[x] = q;
-      oc[x] = c;
+  } else {
+    std::fill(vs_.begin(), vs_.end(), 0.0);
+    std::fill(vq_.begin(), vq_.end(), 0.0);
+    std::fill(vc_.begin(), vc_.end(), 0.0);
+    for (int k = 0; k < len; ++k) {
+      const float* row = in_.row(y + k);
+      for (size_t x = 0; x < cols; ++x) accumulate(row[x], 1.0, vs_[x], vq_[x], vc_[x]);
     }
   }
-  return st;
+  last_row_ = y;
+  double s = 0, q = 0, c = 0;
+  for (int x = 0; x < width_; ++x) {
+    if (running_ && x > 0) {
+      s += vs_[x + len - 1] - vs_[x - 1];
+      q += vq_[x + len - 1] - vq_[x - 1];
+      c += vc_[x + len - 1] - vc_[x - 1];
+    } else {
+      s = q = c = 0;
+      for (int k = 0; k < len; ++k) {
+        s += vs_[x + k];
+        q += vq_[x + k];
+        c += vc_[x + k];
+      }
+    }
+    sum_[x] = s;
+    sum_sq_[x] = q;
+    count_[x] = c;
+  }
 }
 
 }  // namespace relief::process

@@ -1,7 +1,8 @@
 #pragma once
 // Sum, sum of squares and count of the valid (non-NaN) samples in the square
-// window of radius r around every output sample, computed separably: column
-// sums over 2r+1 rows, then row sums of those over 2r+1 columns.
+// window of radius r around every output sample, computed separably (column
+// sums over 2r+1 rows, then sums of those over 2r+1 columns) and streamed one
+// output row at a time, so memory is O(width) whatever the image.
 //
 // The statistics of a sample must depend only on the input around it, so that
 // a quad processed with its border gives bit for bit the values of the whole
@@ -15,15 +16,25 @@
 
 namespace relief::process {
 
-struct WindowStats {
-  int width = 0, height = 0;
-  std::vector<double> sum, sum_sq, count;
-  size_t index(int x, int y) const {
-    return static_cast<size_t>(y) * static_cast<size_t>(width) + static_cast<size_t>(x);
-  }
-};
+class WindowSums {
+ public:
+  // `in` extends `radius` beyond the output on every side.
+  WindowSums(ConstView in, int radius);
+  int width() const { return width_; }
+  // Output row y; rows must be requested in increasing order. The arrays hold
+  // width() values each and stay valid until the next call.
+  void next_row(int y);
+  const double* sum() const { return sum_.data(); }
+  const double* sum_sq() const { return sum_sq_.data(); }
+  const double* count() const { return count_.data(); }
 
-// Output covers the input view shrunk by `radius` on every side.
-WindowStats window_stats(ConstView input, int radius);
+ private:
+  ConstView in_;
+  int radius_, width_;
+  bool running_;
+  int last_row_ = -1;
+  std::vector<double> vs_, vq_, vc_;          // per input column
+  std::vector<double> sum_, sum_sq_, count_;  // per output column
+};
 
 }  // namespace relief::process
