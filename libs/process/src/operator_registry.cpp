@@ -6,6 +6,7 @@
 
 #include "relief/process/operators.h"
 #include "relief/process/speckle.h"
+#include "relief/process/window_stats.h"
 
 namespace relief::process {
 namespace {
@@ -117,6 +118,7 @@ Status run_operator(const OperatorSpec& op, const Params& params, ConstView inpu
   if (auto it = params.find("looks"); it != params.end()) sp.looks = it->second;
   if (auto it = params.find("deramp"); it != params.end()) sp.deramp = it->second;
   if (auto it = params.find("sigma"); it != params.end()) sp.sigma = it->second;
+  sp.integral_input = all_small_integers(input);
   constexpr int kRowsPerTask = 32;
   const int tasks = (output.height + kRowsPerTask - 1) / kRowsPerTask;
   executor.parallel_for(static_cast<size_t>(tasks), [&](size_t t) {

@@ -14,14 +14,15 @@ constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 constexpr double kEpsilon = 1e-10;  // as OTB: "zero" mean or variance
 
 // Streams window sums over output rows [y0, y1).
-WindowSums sums_for_rows(ConstView in, MutView out, int r, int y0, int y1) {
-  return WindowSums(in.window(0, y0, out.width + 2 * r, y1 - y0 + 2 * r), r);
+WindowSums sums_for_rows(ConstView in, MutView out, int r, int y0, int y1, bool integral) {
+  return WindowSums(in.window(0, y0, out.width + 2 * r, y1 - y0 + 2 * r), r, integral);
 }
 
 // Shared skeleton of the local-statistics filters: f(centre, mean, variance, n).
 template <class F>
-void local_stats_filter(ConstView in, MutView out, int r, int y0, int y1, F f) {
-  WindowSums sums = sums_for_rows(in, out, r, y0, y1);
+void local_stats_filter(ConstView in, MutView out, const SpeckleParams& p, int y0, int y1, F f) {
+  const int r = p.radius;
+  WindowSums sums = sums_for_rows(in, out, r, y0, y1, p.integral_input);
   for (int y = y0; y < y1; ++y) {
     sums.next_row(y - y0);
     const double *s = sums.sum(), *q = sums.sum_sq(), *c = sums.count();
@@ -44,12 +45,12 @@ void local_stats_filter(ConstView in, MutView out, int r, int y0, int y1, F f) {
 }  // namespace
 
 void mean_filter(ConstView in, MutView out, const SpeckleParams& p, int y0, int y1) {
-  local_stats_filter(in, out, p.radius, y0, y1, [](double, double m, double, double) { return m; });
+  local_stats_filter(in, out, p, y0, y1, [](double, double m, double, double) { return m; });
 }
 
 void lee_filter(ConstView in, MutView out, const SpeckleParams& p, int y0, int y1) {
   const double cu2 = 1.0 / p.looks;
-  local_stats_filter(in, out, p.radius, y0, y1, [cu2](double i, double m, double var, double) {
+  local_stats_filter(in, out, p, y0, y1, [cu2](double i, double m, double var, double) {
     if (std::abs(m) < kEpsilon) return 0.0;
     if (std::abs(var) < kEpsilon) return m;
     const double ci2 = var / (m * m);
@@ -61,7 +62,7 @@ void lee_filter(ConstView in, MutView out, const SpeckleParams& p, int y0, int y
 
 void kuan_filter(ConstView in, MutView out, const SpeckleParams& p, int y0, int y1) {
   const double cu2 = 1.0 / p.looks;
-  local_stats_filter(in, out, p.radius, y0, y1, [cu2](double i, double m, double var, double) {
+  local_stats_filter(in, out, p, y0, y1, [cu2](double i, double m, double var, double) {
     if (std::abs(m) < kEpsilon) return 0.0;
     if (std::abs(var) < kEpsilon) return m;
     const double ci2 = var / (m * m);
@@ -73,7 +74,7 @@ void kuan_filter(ConstView in, MutView out, const SpeckleParams& p, int y0, int 
 
 void gamma_map_filter(ConstView in, MutView out, const SpeckleParams& p, int y0, int y1) {
   const double looks = p.looks, cu2 = 1.0 / looks, cmax = std::sqrt(2.0) * std::sqrt(cu2);
-  local_stats_filter(in, out, p.radius, y0, y1, [=](double i, double m, double var, double) {
+  local_stats_filter(in, out, p, y0, y1, [=](double i, double m, double var, double) {
     if (std::abs(m) < kEpsilon) return 0.0;
     if (std::abs(var) < kEpsilon) return m;
     const double ci2 = var / (m * m);
@@ -103,7 +104,7 @@ void frost_filter(ConstView in, MutView out, const SpeckleParams& p, int y0, int
     }
   }
   std::vector<double> weight(distances.size());
-  WindowSums sums = sums_for_rows(in, out, r, y0, y1);
+  WindowSums sums = sums_for_rows(in, out, r, y0, y1, p.integral_input);
   for (int y = y0; y < y1; ++y) {
     sums.next_row(y - y0);
     for (int x = 0; x < out.width; ++x) {

@@ -4,11 +4,9 @@
 #include <cmath>
 
 namespace relief::process {
-namespace {
+namespace {}  // namespace
 
-// Integers up to 2^20 keep every window sum of values and squares (at most
-// 19 x 19 of them) below 2^53, where doubles are exact.
-bool exact_integers(ConstView in) {
+bool all_small_integers(ConstView in) {
   constexpr float kLimit = 1 << 20;
   for (int y = 0; y < in.height; ++y) {
     const float* row = in.row(y);
@@ -21,6 +19,8 @@ bool exact_integers(ConstView in) {
   return true;
 }
 
+namespace {
+
 inline void accumulate(float v, double sign, double& s, double& q, double& c) {
   if (std::isnan(v)) return;
   const double d = v;
@@ -31,11 +31,11 @@ inline void accumulate(float v, double sign, double& s, double& q, double& c) {
 
 }  // namespace
 
-WindowSums::WindowSums(ConstView in, int radius)
+WindowSums::WindowSums(ConstView in, int radius, bool integral)
     : in_(in),
       radius_(radius),
       width_(in.width - 2 * radius),
-      running_(exact_integers(in)),
+      running_(integral),
       vs_(static_cast<size_t>(in.width)),
       vq_(vs_.size()),
       vc_(vs_.size()),

@@ -16,6 +16,9 @@ struct SpeckleParams {
   double looks = 1;     // Lee, Kuan, Gamma-MAP
   double deramp = 0.1;  // Frost: damping of the exponential kernel
   double sigma = 0;     // Gauss: standard deviation in samples (0 = radius / 2.5)
+  // Set by run_operator from the input (all_small_integers): enables O(1)
+  // running window sums. Leave false when unsure: results are the same.
+  bool integral_input = false;
 };
 
 // Each processes output rows [y0, y1).

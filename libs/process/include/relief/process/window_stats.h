@@ -16,10 +16,17 @@
 
 namespace relief::process {
 
+// True when every valid value is an integer of magnitude <= 2^20: window sums
+// of such values and their squares (at most 19 x 19) stay below 2^53, where
+// doubles are exact.
+bool all_small_integers(ConstView in);
+
 class WindowSums {
  public:
-  // `in` extends `radius` beyond the output on every side.
-  WindowSums(ConstView in, int radius);
+  // `in` extends `radius` beyond the output on every side. `integral` says
+  // whether every valid input value is an integer of magnitude <= 2^20
+  // (see all_small_integers); it selects the running sums.
+  WindowSums(ConstView in, int radius, bool integral);
   int width() const { return width_; }
   // Output row y; rows must be requested in increasing order. The arrays hold
   // width() values each and stay valid until the next call.
