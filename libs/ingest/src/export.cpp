@@ -112,18 +112,7 @@ Result<ExportReport> export_geotiff(const ExportOptions& o, Progress& progress) 
     }
   }
   progress.end();
-  // GDALClose flushes; a failure there (a full disk) must not leave a file.
-  CPLErrorReset();
-  GDALClose(out.release());
-  if (CPLGetLastErrorType() >= CE_Failure) {
-    ::unlink(tmp.c_str());
-    return fail(fmt::format("{}: write failed: {}", o.output.string(), gdal_error("GTiff")));
-  }
-  if (::rename(tmp.c_str(), o.output.c_str()) != 0) {
-    ::unlink(tmp.c_str());
-    return fail(
-        fmt::format("{}: cannot rename into place: {}", o.output.string(), errno_text(errno)));
-  }
+  if (auto error = finish_atomic_write(out, tmp, o.output.string())) return fail(*error);
   return report;
 }
 

@@ -3,6 +3,11 @@
 #include <cpl_conv.h>
 #include <cpl_error.h>
 
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
 #include <mutex>
 
 namespace relief::ingest {
@@ -33,6 +38,22 @@ Dataset open_raster(const std::string& path) {
   CPLErrorReset();
   return Dataset(GDALOpenEx(path.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY | GDAL_OF_VERBOSE_ERROR,
                             nullptr, nullptr, nullptr));
+}
+
+std::optional<std::string> finish_atomic_write(Dataset& out, const std::string& tmp,
+                                               const std::string& final_path) {
+  CPLErrorReset();
+  GDALClose(out.release());
+  if (CPLGetLastErrorType() >= CE_Failure) {
+    ::unlink(tmp.c_str());
+    return final_path + ": write failed: " + gdal_error("GTiff");
+  }
+  if (::rename(tmp.c_str(), final_path.c_str()) != 0) {
+    const std::string reason = std::strerror(errno);
+    ::unlink(tmp.c_str());
+    return final_path + ": cannot rename into place: " + reason;
+  }
+  return std::nullopt;
 }
 
 }  // namespace relief::ingest

@@ -4,6 +4,7 @@
 #include <gdal.h>
 
 #include <memory>
+#include <optional>
 #include <string>
 
 namespace relief::ingest {
@@ -26,5 +27,11 @@ using Dataset = std::unique_ptr<std::remove_pointer_t<GDALDatasetH>, DatasetClos
 
 // Opens a raster read-only; nullptr on failure (see gdal_error()).
 Dataset open_raster(const std::string& path);
+
+// Closes `out` (written at `tmp`), which flushes it, and renames it to
+// `final_path`; on any failure (a full disk shows up at the flush) the
+// temporary file is removed and the error names `final_path`.
+std::optional<std::string> finish_atomic_write(Dataset& out, const std::string& tmp,
+                                               const std::string& final_path);
 
 }  // namespace relief::ingest

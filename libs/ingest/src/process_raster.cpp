@@ -114,17 +114,7 @@ Result<ProcessRasterReport> process_raster(const ProcessRasterOptions& o, Execut
     progress.advance(static_cast<uint64_t>(rows));
   }
   progress.end();
-  CPLErrorReset();
-  GDALClose(out.release());
-  if (CPLGetLastErrorType() >= CE_Failure) {
-    ::unlink(tmp.c_str());
-    return fail(fmt::format("{}: write failed: {}", o.output.string(), gdal_error("GTiff")));
-  }
-  if (::rename(tmp.c_str(), o.output.c_str()) != 0) {
-    ::unlink(tmp.c_str());
-    return fail(
-        fmt::format("{}: cannot rename into place: {}", o.output.string(), errno_text(errno)));
-  }
+  if (auto error = finish_atomic_write(out, tmp, o.output.string())) return fail(*error);
   return ProcessRasterReport{
       width, height,
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()};

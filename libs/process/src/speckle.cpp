@@ -48,28 +48,27 @@ void mean_filter(ConstView in, MutView out, const SpeckleParams& p, int y0, int 
   local_stats_filter(in, out, p, y0, y1, [](double, double m, double, double) { return m; });
 }
 
-void lee_filter(ConstView in, MutView out, const SpeckleParams& p, int y0, int y1) {
+// Lee and Kuan share everything but the weight of the centre sample.
+template <class Weight>
+void mmse_filter(ConstView in, MutView out, const SpeckleParams& p, int y0, int y1, Weight weight) {
   const double cu2 = 1.0 / p.looks;
-  local_stats_filter(in, out, p, y0, y1, [cu2](double i, double m, double var, double) {
+  local_stats_filter(in, out, p, y0, y1, [=](double i, double m, double var, double) {
     if (std::abs(m) < kEpsilon) return 0.0;
     if (std::abs(var) < kEpsilon) return m;
     const double ci2 = var / (m * m);
     if (ci2 < cu2) return m;
-    const double w = 1.0 - cu2 / ci2;
+    const double w = weight(ci2, cu2);
     return i * w + m * (1.0 - w);
   });
 }
 
+void lee_filter(ConstView in, MutView out, const SpeckleParams& p, int y0, int y1) {
+  mmse_filter(in, out, p, y0, y1, [](double ci2, double cu2) { return 1.0 - cu2 / ci2; });
+}
+
 void kuan_filter(ConstView in, MutView out, const SpeckleParams& p, int y0, int y1) {
-  const double cu2 = 1.0 / p.looks;
-  local_stats_filter(in, out, p, y0, y1, [cu2](double i, double m, double var, double) {
-    if (std::abs(m) < kEpsilon) return 0.0;
-    if (std::abs(var) < kEpsilon) return m;
-    const double ci2 = var / (m * m);
-    if (ci2 < cu2) return m;
-    const double w = (1.0 - cu2 / ci2) / (1.0 + cu2);
-    return i * w + m * (1.0 - w);
-  });
+  mmse_filter(in, out, p, y0, y1,
+              [](double ci2, double cu2) { return (1.0 - cu2 / ci2) / (1.0 + cu2); });
 }
 
 void gamma_map_filter(ConstView in, MutView out, const SpeckleParams& p, int y0, int y1) {
