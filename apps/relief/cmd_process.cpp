@@ -1,3 +1,4 @@
+#include <cmath>
 #include <cstdio>
 
 #include <fmt/format.h>
@@ -34,9 +35,10 @@ int print_catalogue() {
   for (const auto& op : process::operator_catalogue()) {
     std::printf("%-10s %s (input: %s)\n", op.name.c_str(), op.summary.c_str(), op.input.c_str());
     for (const auto& p : op.params) {
-      std::printf("    %-8s %s in [%g, %g], default %g: %s\n", p.name.c_str(),
-                  p.integer ? "integer" : "number", p.min, p.max, p.default_value,
-                  p.meaning.c_str());
+      const std::string def =
+          std::isnan(p.default_value) ? "auto" : fmt::format("{:g}", p.default_value);
+      std::printf("    %-8s %s in [%g, %g], default %s: %s\n", p.name.c_str(),
+                  p.integer ? "integer" : "number", p.min, p.max, def.c_str(), p.meaning.c_str());
     }
   }
   return 0;

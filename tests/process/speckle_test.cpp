@@ -2,6 +2,7 @@
 // the formulas, quad-by-quad equals whole image bit for bit, and bad parameters.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <random>
@@ -40,7 +41,22 @@ Image run(const std::string& name, const std::vector<std::string>& params, const
   const int m = margin_of(*op, *p);
   Image out{in.width - 2 * m, in.height - 2 * m, {}};
   out.v.resize(static_cast<size_t>(out.width) * out.height);
-  auto st = run_operator(*op, *p, in.cview(), out.view(), ex);
+  // Global operators get the statistics of the whole input.
+  GlobalStats g;
+  double n = 0, sum = 0, sq = 0;
+  g.min = INFINITY;
+  g.max = -INFINITY;
+  for (float v : in.v) {
+    if (std::isnan(v)) continue;
+    n += 1;
+    sum += v;
+    sq += double(v) * v;
+    g.min = std::min<double>(g.min, v);
+    g.max = std::max<double>(g.max, v);
+  }
+  g.mean = sum / n;
+  g.stddev = std::sqrt(std::max(0.0, sq / n - g.mean * g.mean));
+  auto st = run_operator(*op, *p, in.cview(), out.view(), ex, &g);
   EXPECT_TRUE(st) << st.error().message;
   return out;
 }
@@ -121,6 +137,7 @@ TEST(Speckle, ConstantImageIsReturnedUnchanged) {
   Image in{40, 30, std::vector<float>(1200, 42.5f)};
   InlineExecutor ex;
   for (const auto& op : operator_catalogue()) {
+    if (op.needs_global_stats) continue;  // dynamic-range operators: see DynamicRange tests
     const Image out = run(op.name, {"radius=3"}, in, ex);
     for (float v : out.v) ASSERT_FLOAT_EQ(v, 42.5f) << op.name;
   }
@@ -135,6 +152,7 @@ TEST(Speckle, QuadByQuadWithBordersEqualsWholeImageBitForBit) {
   for (const Image* image : {&integral, &scaled}) {
     const Image& in = *image;
     for (const auto& op : operator_catalogue()) {
+      if (op.needs_global_stats) continue;  // point operators have no neighbourhood
       for (int r : {2, 5}) {
         SCOPED_TRACE(op.name + " r=" + std::to_string(r));
         const std::vector<std::string> params = {"radius=" + std::to_string(r)};
@@ -198,6 +216,57 @@ TEST(Speckle, BadParametersAreErrors) {
   ASSERT_TRUE(ok);
   EXPECT_EQ(ok->at("radius"), 4);
   EXPECT_EQ(margin_of(*lee, *ok), 4);
+}
+
+TEST(DynamicRange, GlobalOperatorsFollowTheirFormulas) {
+  const Image in = umbra_crop(500, 500, 200, 150);
+  ThreadExecutor ex(2);
+  double n = 0, sum = 0, sq = 0, lo = INFINITY, hi = -INFINITY;
+  for (float v : in.v) {
+    n += 1, sum += v, sq += double(v) * v, lo = std::min<double>(lo, v),
+                                           hi = std::max<double>(hi, v);
+  }
+  const double mean = sum / n, sd = std::sqrt(sq / n - mean * mean);
+  const Image lin = run("linear", {}, in, ex);
+  const Image log = run("log", {"c=50"}, in, ex);
+  const Image gam = run("gamma", {"gamma=0.7"}, in, ex);
+  for (size_t k = 0; k < in.v.size(); ++k) {
+    const double a = in.v[k];
+    ASSERT_NEAR(lin.v[k], std::clamp(a / (mean + 3 * sd), 0.0, 1.0), 1e-6);
+    const double x = std::clamp((a - lo) / (mean + 3 * sd - lo), 0.0, 1.0);
+    ASSERT_NEAR(log.v[k], std::log1p(50 * x) / std::log1p(50), 1e-6);
+    ASSERT_NEAR(gam.v[k], std::pow(a / hi, 0.7), 1e-6);
+  }
+}
+
+TEST(DynamicRange, GlobalOperatorsAreMonotonicAndNeedStatistics) {
+  Image ramp{256, 1, {}};
+  for (int i = 0; i < 256; ++i) ramp.v.push_back(static_cast<float>(i));
+  ThreadExecutor ex(2);
+  for (const char* name : {"linear", "log", "gamma"}) {
+    const Image out = run(name, {}, ramp, ex);
+    for (int i = 1; i < 256; ++i) ASSERT_GE(out.v[i], out.v[i - 1]) << name << " at " << i;
+    EXPECT_EQ(out.v[0], 0.0f) << name;
+    // The ramp's mean + 3 std (349) lies above its maximum: only gamma, which
+    // divides by the maximum, reaches white.
+    if (std::string(name) == "gamma") {
+      EXPECT_EQ(out.v[255], 1.0f);
+    } else {
+      EXPECT_LT(out.v[255], 1.0f) << name;
+      EXPECT_GT(out.v[255], 0.7f) << name;
+    }
+    const OperatorSpec* op = find_operator(name);
+    MutView o{const_cast<float*>(out.v.data()), 256, 1, 256, 0, 0};
+    auto st = run_operator(*op, *parse_params(*op, {}), ramp.cview(), o, ex, nullptr);
+    EXPECT_FALSE(st) << name;
+  }
+  Image flat{8, 8, std::vector<float>(64, 3.0f)};
+  const OperatorSpec* lin = find_operator("linear");
+  GlobalStats g{3, 3, 3, 0};
+  Image out{8, 8, std::vector<float>(64)};
+  auto st = run_operator(*lin, *parse_params(*lin, {}), flat.cview(), out.view(), ex, &g);
+  ASSERT_FALSE(st);
+  EXPECT_NE(st.error().message.find("no dynamic range"), std::string::npos);
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 #include <fmt/format.h>
 
@@ -45,6 +46,18 @@ Result<ProcessRasterReport> process_raster(const ProcessRasterOptions& o, Execut
                             o.input, GDALGetDataTypeName(GDALGetRasterDataType(band))));
   }
   const int width = GDALGetRasterXSize(in.get()), height = GDALGetRasterYSize(in.get());
+  // Global operators see the statistics of the whole raster (one scan, nodata left out).
+  std::optional<process::GlobalStats> stats;
+  if (op->needs_global_stats) {
+    process::GlobalStats g;
+    CPLErrorReset();
+    if (GDALComputeRasterStatistics(band, FALSE, &g.min, &g.max, &g.mean, &g.stddev, nullptr,
+                                    nullptr) != CE_None) {
+      return fail(fmt::format("{}: no statistics: {}", o.input,
+                              gdal_error("no valid samples (nodata everywhere)")));
+    }
+    stats = g;
+  }
   int has_nodata = 0;
   const double nodata = GDALGetRasterNoDataValue(band, &has_nodata);
 
@@ -104,7 +117,9 @@ Result<ProcessRasterReport> process_raster(const ProcessRasterOptions& o, Execut
     const process::ConstView in_view{input_rows.data(), padded_width, rows + 2 * margin,
                                      padded_width,      -margin,      y0 - margin};
     const process::MutView out_view{output_rows.data(), width, rows, width, 0, y0};
-    if (auto st = process::run_operator(*op, params, in_view, out_view, executor); !st) {
+    if (auto st = process::run_operator(*op, params, in_view, out_view, executor,
+                                        stats ? &*stats : nullptr);
+        !st) {
       return discard(st.error().message);
     }
     if (GDALRasterIO(out_band, GF_Write, 0, y0, width, rows, output_rows.data(), width, rows,

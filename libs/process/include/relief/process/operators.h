@@ -7,13 +7,14 @@
 
 #include "relief/base/parallel.h"
 #include "relief/base/result.h"
+#include "relief/process/dynamic_range.h"
 #include "relief/process/view.h"
 
 namespace relief::process {
 
 struct ParamSpec {
   std::string name;
-  double min, max, default_value;
+  double min, max, default_value;  // a NaN default is derived from the global statistics
   bool integer;
   std::string meaning;
 };
@@ -23,6 +24,7 @@ struct OperatorSpec {
   std::string summary;
   std::string input;  // what the operator expects ("amplitude, linear", ...)
   std::vector<ParamSpec> params;
+  bool needs_global_stats = false;  // global dynamic-range operators
 };
 
 const std::vector<OperatorSpec>& operator_catalogue();
@@ -39,7 +41,9 @@ int margin_of(const OperatorSpec& op, const Params& params);
 
 // Runs the operator: `input` extends margin_of() samples beyond `output` on
 // every side. NaN is nodata in and out. Rows are spread over the executor.
+// `stats` are the dataset's global statistics; operators that need them fail
+// without them.
 Status run_operator(const OperatorSpec& op, const Params& params, ConstView input, MutView output,
-                    Executor& executor);
+                    Executor& executor, const GlobalStats* stats = nullptr);
 
 }  // namespace relief::process
