@@ -208,7 +208,15 @@ Result<MemoryPlan> plan_memory(uint64_t budget, unsigned workers) {
 
 struct LevelResult {
   tiles::LevelIndex index;
+  // Interior statistics of every tile, from the headers just written or found.
+  std::vector<std::pair<TileKey, tiles::SampleStats>> tile_stats;
   uint64_t written = 0, resumed = 0;
+};
+
+struct WrittenTile {
+  tiles::IndexEntry entry;
+  tiles::SampleStats stats;
+  bool resumed;
 };
 
 class Builder {
@@ -243,10 +251,12 @@ class Builder {
       RELIEF_CHECK(build_parents(level));
     lap("pyramid");
     std::vector<tiles::LevelIndex> indices;
+    tiles::SampleStats global;
     for (int level = min_level_; level <= max_level_; ++level) {
       LevelResult r = RELIEF_TRY(write_level(level));
       report.tiles_written += r.written;
       report.tiles_resumed += r.resumed;
+      if (level == max_level_) global = combined_stats(std::move(r.tile_stats));
       indices.push_back(std::move(r.index));
     }
     lap("tiles");
@@ -255,7 +265,7 @@ class Builder {
                               o_.inputs.front()));
     }
     for (const auto& index : indices) RELIEF_CHECK(tiles::write_level_index(o_.output, index));
-    report.manifest = make_manifest(indices.back());
+    report.manifest = make_manifest(global);
     // Tiles are renamed into place without fsync (atomic against a crash of the
     // process); one syncfs makes them all durable before the manifest declares
     // the store complete, so a power cut cannot leave a manifest over lost tiles.
@@ -381,18 +391,19 @@ class Builder {
   Result<LevelResult> write_level(int level) {
     const auto keys = cores_.list(level);
     std::mutex mutex;
-    LevelResult result{tiles::LevelIndex(level)};
+    LevelResult result{tiles::LevelIndex(level), {}, 0, 0};
     FirstError error;
     progress_.begin(fmt::format("tiles level {}", level), keys.size());
     ex_.parallel_for(keys.size(), [&](size_t i) {
       if (!error.failed()) {
-        auto entry = write_tile(keys[i]);
-        if (!entry)
-          error.set(entry.error());
-        else {
+        auto tile = write_tile(keys[i]);
+        if (!tile) {
+          error.set(tile.error());
+        } else {
           std::lock_guard lock(mutex);
-          result.index.add(entry->first);
-          (entry->second ? result.resumed : result.written) += 1;
+          result.index.add(tile->entry);
+          result.tile_stats.emplace_back(keys[i], tile->stats);
+          (tile->resumed ? result.resumed : result.written) += 1;
         }
       }
       progress_.advance();
@@ -402,16 +413,15 @@ class Builder {
     return result;
   }
 
-  // Writes one bordered tile unless a valid one is already there. Returns its
-  // index entry and whether it was resumed.
-  Result<std::pair<tiles::IndexEntry, bool>> write_tile(const TileKey& key) {
+  // Writes one bordered tile unless a valid one is already there.
+  Result<WrittenTile> write_tile(const TileKey& key) {
     const fs::path path = o_.output / tiles::tile_relative_path(key);
     std::error_code ec;
     if (fs::exists(path, ec)) {
       auto bytes = read_file(path);
       if (bytes) {
         if (auto h = tiles::parse_tile_header(*bytes, path.string())) {
-          return std::pair{entry_for(key, *h, bytes->size()), true};
+          return WrittenTile{entry_for(key, *h, bytes->size()), h->stats, true};
         }
       }
     }
@@ -432,7 +442,7 @@ class Builder {
     auto bytes = RELIEF_TRY(tiles::encode_tile(bordered, grid_.border(), codec_));
     RELIEF_CHECK(tiles::write_tile_file(o_.output, key, bytes));
     auto header = RELIEF_TRY(tiles::parse_tile_header(bytes, path.string()));
-    return std::pair{entry_for(key, header, bytes.size()), false};
+    return WrittenTile{entry_for(key, header, bytes.size()), header.stats, false};
   }
 
   static tiles::IndexEntry entry_for(const TileKey& key, const tiles::TileHeader& h, size_t bytes) {
@@ -440,7 +450,7 @@ class Builder {
             static_cast<uint32_t>(h.stats.valid_count), static_cast<uint32_t>(bytes)};
   }
 
-  tiles::Manifest make_manifest(const tiles::LevelIndex& finest) {
+  tiles::Manifest make_manifest(const tiles::SampleStats& stats) {
     tiles::Manifest m;
     m.kind = o_.kind;
     m.sample_type = type_;
@@ -462,27 +472,30 @@ class Builder {
       m.extent.north = std::max(m.extent.north, s.box.north);
       m.sources.push_back(to_source_info(s));
     }
-    m.stats = combined_stats(finest);
+    m.stats = stats;
     return m;
   }
 
-  // Global statistics from the finest tiles' header statistics (interiors only,
-  // so no sample counts twice).
-  tiles::SampleStats combined_stats(const tiles::LevelIndex& finest) {
+  // Global statistics from the finest tiles' interior statistics (borders are
+  // left out, so no sample counts twice), combined in tile order so the
+  // manifest does not depend on which thread finished first.
+  tiles::SampleStats combined_stats(std::vector<std::pair<TileKey, tiles::SampleStats>> tiles) {
+    std::sort(tiles.begin(), tiles.end(), [](const auto& a, const auto& b) {
+      return std::tie(a.first.y, a.first.x) < std::tie(b.first.y, b.first.x);
+    });
+    const double channels = type_ == tiles::SampleType::UInt8 ? 3 : 1;
     double count = 0, sum = 0, sum_sq = 0;
     double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-    for (const auto& e : finest.entries()) {
-      auto bytes = read_file(o_.output / tiles::tile_relative_path(e.key));
-      if (!bytes) continue;
-      auto h = tiles::parse_tile_header(*bytes, "");
-      if (!h || h->stats.valid_count == 0) continue;
-      const double n =
-          static_cast<double>(h->stats.valid_count) * (type_ == tiles::SampleType::UInt8 ? 3 : 1);
+    uint64_t valid = 0;
+    for (const auto& [key, t] : tiles) {
+      if (t.valid_count == 0) continue;
+      const double n = static_cast<double>(t.valid_count) * channels;
       count += n;
-      sum += h->stats.mean * n;
-      sum_sq += (h->stats.stddev * h->stats.stddev + h->stats.mean * h->stats.mean) * n;
-      lo = std::min(lo, h->stats.min);
-      hi = std::max(hi, h->stats.max);
+      sum += t.mean * n;
+      sum_sq += (t.stddev * t.stddev + t.mean * t.mean) * n;
+      lo = std::min(lo, t.min);
+      hi = std::max(hi, t.max);
+      valid += t.valid_count;
     }
     tiles::SampleStats s;
     if (count == 0) return s;
@@ -490,8 +503,6 @@ class Builder {
     s.max = hi;
     s.mean = sum / count;
     s.stddev = std::sqrt(std::max(0.0, sum_sq / count - s.mean * s.mean));
-    uint64_t valid = 0;
-    for (const auto& e : finest.entries()) valid += e.valid_count;
     s.valid_count = valid;
     return s;
   }
