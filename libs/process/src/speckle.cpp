@@ -5,6 +5,7 @@
 #include <limits>
 #include <vector>
 
+#include "kernels.h"
 #include "relief/process/window_stats.h"
 
 namespace relief::process {
@@ -222,5 +223,34 @@ void median_filter(ConstView in, MutView out, const SpeckleParams& p, int y0, in
     }
   }
 }
+
+// --- registry adapters ------------------------------------------------------
+
+namespace {
+
+SpeckleParams speckle_params(const KernelContext& c) {
+  SpeckleParams p;
+  p.radius = c.ip("radius");
+  if (auto it = c.params.find("looks"); it != c.params.end()) p.looks = it->second;
+  if (auto it = c.params.find("deramp"); it != c.params.end()) p.deramp = it->second;
+  if (auto it = c.params.find("sigma"); it != c.params.end()) p.sigma = it->second;
+  p.integral_input = c.integral_input;
+  return p;
+}
+
+}  // namespace
+
+#define RELIEF_SPECKLE_KERNEL(kernel, filter)                                      \
+  void kernel(ConstView in, MutView out, const KernelContext& c, int y0, int y1) { \
+    filter(in, out, speckle_params(c), y0, y1);                                    \
+  }
+RELIEF_SPECKLE_KERNEL(mean_kernel, mean_filter)
+RELIEF_SPECKLE_KERNEL(gauss_kernel, gauss_filter)
+RELIEF_SPECKLE_KERNEL(median_kernel, median_filter)
+RELIEF_SPECKLE_KERNEL(lee_kernel, lee_filter)
+RELIEF_SPECKLE_KERNEL(kuan_kernel, kuan_filter)
+RELIEF_SPECKLE_KERNEL(frost_kernel, frost_filter)
+RELIEF_SPECKLE_KERNEL(gamma_map_filter_kernel, gamma_map_filter)
+#undef RELIEF_SPECKLE_KERNEL
 
 }  // namespace relief::process

@@ -1,10 +1,10 @@
 #pragma once
-// Global dynamic-range reduction of SAR amplitudes (seed 003 §2.2.3): each
-// output sample is a function of its input sample and of global statistics of
-// the whole dataset (from the store's manifest or a scan of the raster, never
-// from what happens to be on screen). Input: linear amplitude. Output: grey
-// levels in [0, 1]; NaN stays NaN.
-#include "relief/process/view.h"
+// Dynamic-range reduction of SAR amplitudes (seed 003 §2.2). Every operator
+// maps linear amplitudes to grey levels in [0, 1]; NaN stays NaN. Global
+// operators are a function of the sample and of the dataset's global
+// statistics (from the store's manifest or a scan of the whole raster, never
+// from what happens to be on screen); local ones also of a neighbourhood.
+// docs/process.md gives every formula and parameter.
 
 namespace relief::process {
 
@@ -12,11 +12,11 @@ struct GlobalStats {
   double min = 0, max = 0, mean = 0, stddev = 0;
 };
 
-// g = a / t clipped to [0, 1], t = mean + k * stddev (k = 3 in the seed).
-void linear_map(ConstView in, MutView out, double t, int y0, int y1);
-// a' = (a - t_min) / (t_max - t_min) clipped to [0, 1]; g = log(1 + c a') / log(1 + c).
-void log_map(ConstView in, MutView out, double c, double t_min, double t_max, int y0, int y1);
-// g = (a / a_max)^gamma clipped to [0, 1], gamma in (0, 1].
-void gamma_map(ConstView in, MutView out, double gamma, double a_max, int y0, int y1);
+// E[a^gamma] estimated from the mean and standard deviation alone (second-order
+// Taylor expansion around the mean). The RAT variant needs the mean of the
+// gamma-mapped amplitudes; a store's manifest holds only these four numbers.
+// For Rayleigh-distributed amplitudes and gamma = 0.7 the estimate is 0.14 %
+// above the exact value.
+double estimated_power_mean(const GlobalStats& stats, double gamma);
 
 }  // namespace relief::process

@@ -12,11 +12,17 @@
 
 namespace relief::process {
 
+// How a parameter follows the pyramid level so that masks keep their size in
+// world space (seed 003 §2.3.3): a length in samples halves with each coarser
+// level; a number of dyadic scales loses one.
+enum class Scaling { None, Length, DyadicScales };
+
 struct ParamSpec {
   std::string name;
   double min, max, default_value;  // a NaN default is derived from the global statistics
   bool integer;
   std::string meaning;
+  Scaling scaling = Scaling::None;
 };
 
 struct OperatorSpec {
@@ -24,7 +30,8 @@ struct OperatorSpec {
   std::string summary;
   std::string input;  // what the operator expects ("amplitude, linear", ...)
   std::vector<ParamSpec> params;
-  bool needs_global_stats = false;  // global dynamic-range operators
+  bool needs_global_stats = false;  // dynamic-range operators
+  bool sar_only = false;            // meaningless on elevation or imagery
 };
 
 const std::vector<OperatorSpec>& operator_catalogue();
@@ -38,6 +45,11 @@ Result<Params> parse_params(const OperatorSpec& op, const std::vector<std::strin
 
 // The number of input samples an operator needs beyond each side of its output.
 int margin_of(const OperatorSpec& op, const Params& params);
+
+// The parameters for data `factor` (a power of two >= 1) times coarser than
+// the data they were given for: lengths divided, rounded, possibly to 0 (a
+// mask smaller than one sample: the operator then uses the sample itself).
+Params scale_params(const OperatorSpec& op, const Params& params, double factor);
 
 // Runs the operator: `input` extends margin_of() samples beyond `output` on
 // every side. NaN is nodata in and out. Rows are spread over the executor.
