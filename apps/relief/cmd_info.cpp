@@ -75,6 +75,7 @@ int run_info(const std::vector<std::string>& argv) {
         fmt::format("source       {} ({} x {} x {} {}, {})\n", s.path, s.width, s.height, s.bands,
                     s.data_type, s.crs.size() > 40 ? s.crs.substr(0, 40) + "..." : s.crs);
   }
+  out += fmt::format("created by   {}\n", m.created_by);
   out += fmt::format("\n{:>5} {:>12} {:>8} {:>12}\n", "level", "spacing", "tiles", "bytes");
   for (const auto& l : levels) {
     out += fmt::format("{:>5} {:>11.7f}° {:>8} {:>12}\n", l["level"].get<int>(),

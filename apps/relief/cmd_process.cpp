@@ -1,5 +1,6 @@
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 
 #include <fmt/format.h>
 
@@ -7,6 +8,7 @@
 #include "commands.h"
 #include "relief/base/units.h"
 #include "relief/ingest/process_raster.h"
+#include "relief/pipeline/process_store.h"
 #include "relief/process/operators.h"
 
 namespace relief::cli {
@@ -14,14 +16,21 @@ namespace relief::cli {
 namespace {
 constexpr const char* kHelp =
     R"(usage: relief process INPUT -o OUT.tif --op NAME [--param key=value]... [options]
+       relief process STORE -o STORE2 --op NAME [--param key=value]... [options]
        relief process --list
 
 Runs a raster operator over one band of a raster GDAL reads, out of core and on
 all cores, and writes a tiled Float32 GeoTIFF with the input's georeferencing.
 Nodata (the band's nodata value, or NaN) is left out of every window and kept.
 
+Given a store (a directory with manifest.json), processes every pyramid level
+into a new store: tiles agree with each other and with the whole level;
+window radii are for the finest level and shrink with coarser levels so masks
+keep their size on the ground; global statistics come from the manifest.
+Operators for SAR refuse elevation and imagery stores.
+
 options:
-  -o, --output FILE    GeoTIFF to write (atomically)
+  -o, --output PATH    GeoTIFF or store directory to write (atomically; a store must not exist)
   --op NAME            operator (see --list)
   --param key=value    operator parameter; repeat for several
   --list               list every operator with its parameters, ranges and defaults
@@ -33,11 +42,11 @@ options:
 
 int print_catalogue() {
   for (const auto& op : process::operator_catalogue()) {
-    std::printf("%-10s %s (input: %s)\n", op.name.c_str(), op.summary.c_str(), op.input.c_str());
+    std::printf("%-20s %s (input: %s)\n", op.name.c_str(), op.summary.c_str(), op.input.c_str());
     for (const auto& p : op.params) {
       const std::string def =
           std::isnan(p.default_value) ? "auto" : fmt::format("{:g}", p.default_value);
-      std::printf("    %-8s %s in [%g, %g], default %s: %s\n", p.name.c_str(),
+      std::printf("    %-10s %s in [%g, %g], default %s: %s\n", p.name.c_str(),
                   p.integer ? "integer" : "number", p.min, p.max, def.c_str(), p.meaning.c_str());
     }
   }
@@ -91,6 +100,15 @@ int run_process(const std::vector<std::string>& argv) {
   ThreadExecutor executor(threads->value_or(0));
   auto progress =
       args->has("--quiet") ? std::make_unique<NullProgress>() : make_progress_for_stderr();
+  if (std::filesystem::is_directory(o.input)) {
+    pipeline::ProcessStoreOptions so{o.input, o.output, o.op, o.params};
+    if (args->get("--memory")) so.memory_budget = o.memory_budget / 2;
+    auto r = pipeline::process_store(so, executor, *progress);
+    if (!r) return report_error(r.error().message);
+    std::printf("wrote %s: %llu tiles on %d levels, %s, %.2f s\n", so.output.c_str(),
+                static_cast<unsigned long long>(r->tiles), r->levels, o.op.c_str(), r->seconds);
+    return 0;
+  }
   auto report = ingest::process_raster(o, executor, *progress);
   if (!report) return report_error(report.error().message);
   std::printf("wrote %s: %d x %d samples, %s, %.2f s (%.1f Msamples/s)\n", o.output.c_str(),

@@ -18,7 +18,8 @@ commands:
   info     describe a store: manifest, tiles and bytes per level, compression
   verify   check every tile header and checksum of a store
   export   reassemble one level of a store into a GeoTIFF
-  process  run a raster operator (speckle filters, ...) over a GeoTIFF
+  process  run an operator (speckle filter, dynamic-range reduction, ...) over a GeoTIFF or a store
+  fuse     combine stores of one kind tile by tile (weighted blend or void filling)
 
 Run 'relief <command> --help' for the options of a command.
 )";
@@ -62,6 +63,7 @@ int main(int argc, char** argv) {
     if (command == "verify") return relief::cli::run_verify(args);
     if (command == "export") return relief::cli::run_export(args);
     if (command == "process") return relief::cli::run_process(args);
+    if (command == "fuse") return relief::cli::run_fuse(args);
     if (command == "--version") {
       std::puts("relief 0.1.0");
       return 0;

@@ -84,12 +84,78 @@ TEST(Process, BadInputsAreOneLineErrors) {
                "missing.tif");
   expect_error({"process", data("imagery/RGB.byte.tif"), "-o", out, "--op", "lee"}, "3 bands");
   expect_error({"process", sar, "-o", "/proc/relief/o.tif", "--op", "lee"}, "/proc/relief/o.tif");
-  expect_error({"process", dir.path().string(), "-o", out, "--op", "lee"}, "is a directory");
+  expect_error({"process", dir.path().string(), "-o", out, "--op", "lee"}, "not a relief store");
   expect_error({"process", sar, "-o", out, "--op", "lee", "--compress", "lzw"}, "--compress");
   auto list = run_relief({"process", "--list"});
   EXPECT_EQ(list.exit_code, 0);
-  for (const char* op : {"lee", "kuan", "frost", "gamma-map", "median", "gauss", "mean"}) {
+  for (const char* op : {"lee",
+                         "kuan",
+                         "frost",
+                         "gamma-map",
+                         "median",
+                         "gauss",
+                         "mean",
+                         "wavelet",
+                         "rat",
+                         "drago",
+                         "tumblin",
+                         "schlick",
+                         "reinhard-devlin",
+                         "chiu",
+                         "retinex",
+                         "ashikhmin",
+                         "reinhard",
+                         "durand",
+                         "ext-schlick",
+                         "ext-reinhard-devlin",
+                         "amplitude-to-db"}) {
     EXPECT_NE(list.out.find(op), std::string::npos) << op;
+  }
+}
+
+TEST(Process, StoresAreProcessedAndFusedFromTheCommandLine) {
+  ScratchDir dir("process_store_cli");
+  const std::string sar = (dir / "sar").string(), dem = (dir / "dem").string();
+  ASSERT_EQ(
+      run_relief({"build", data("sar/umbra_mount_yasur.tif"), "--kind", "sar", "-o", sar, "-q"})
+          .exit_code,
+      0);
+  ASSERT_EQ(
+      run_relief({"build", data("srtm/N42E001.hgt.zip"), "--kind", "elevation", "-o", dem, "-q"})
+          .exit_code,
+      0);
+  const std::string out = (dir / "despeckled").string();
+  auto r = run_relief({"process", sar, "-o", out, "--op", "gamma-map", "--param", "radius=3",
+                       "--param", "looks=2", "-q"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("tiles on 18 levels"), std::string::npos) << r.out;
+  EXPECT_EQ(run_relief({"verify", out}).exit_code, 0);
+  auto info = run_relief({"info", out});
+  EXPECT_NE(info.out.find("relief process --op gamma-map radius=3 looks=2"), std::string::npos)
+      << info.out;
+  // A SAR operator on elevation, and an existing output: one-line errors.
+  auto bad = run_relief({"process", dem, "-o", (dir / "x").string(), "--op", "lee"});
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_NE(bad.err.find("expects SAR amplitude, linear, but the store holds elevation"),
+            std::string::npos)
+      << bad.err;
+  bad = run_relief({"process", sar, "-o", out, "--op", "lee"});
+  EXPECT_NE(bad.err.find("already exists"), std::string::npos) << bad.err;
+  // Fusion.
+  const std::string fused = (dir / "fused").string();
+  r = run_relief({"fuse", dem, dem, "-o", fused, "--weights", "1,2", "-q"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(run_relief({"verify", fused}).exit_code, 0);
+  for (const auto& [args, needle] : std::vector<std::pair<std::vector<std::string>, std::string>>{
+           {{"fuse", dem, sar, "-o", (dir / "y").string()}, "holds sar data"},
+           {{"fuse", dem, dem, "-o", (dir / "y").string(), "--weights", "1,x"}, "'x'"},
+           {{"fuse", dem, dem, "-o", (dir / "y").string(), "--mode", "max"}, "--mode"},
+           {{"fuse", dem, "-o", (dir / "y").string()}, "at least two"}}) {
+    bad = run_relief(args);
+    EXPECT_NE(bad.exit_code, 0);
+    EXPECT_EQ(std::count(bad.err.begin(), bad.err.end(), '\n'), 1) << bad.err;
+    EXPECT_NE(bad.err.find(needle), std::string::npos) << bad.err;
+    EXPECT_FALSE(fs::exists(dir / "y"));
   }
 }
 

@@ -51,7 +51,7 @@ TEST(AssembleBordered, TakesEachBorderFromTheOwningNeighbour) {
     around[k] = &cores[k];
   }
   around[0] = nullptr;  // the north-west neighbour does not exist
-  const Raster t = assemble_bordered(around, w, h, b, SampleType::Float32);
+  const Raster t = tiles::assemble_bordered(around, w, h, b, SampleType::Float32);
   ASSERT_EQ(t.width(), w + 2);
   ASSERT_EQ(t.height(), h + 2);
   auto at = [&](int i, int j) { return t.f32()[(j + b) * (w + 2) + (i + b)]; };

@@ -421,7 +421,7 @@ class Builder {
       auto bytes = read_file(path);
       if (bytes) {
         if (auto h = tiles::parse_tile_header(*bytes, path.string())) {
-          return WrittenTile{entry_for(key, *h, bytes->size()), h->stats, true};
+          return WrittenTile{tiles::index_entry_for(key, *h, bytes->size()), h->stats, true};
         }
       }
     }
@@ -442,12 +442,7 @@ class Builder {
     auto bytes = RELIEF_TRY(tiles::encode_tile(bordered, grid_.border(), codec_));
     RELIEF_CHECK(tiles::write_tile_file(o_.output, key, bytes));
     auto header = RELIEF_TRY(tiles::parse_tile_header(bytes, path.string()));
-    return WrittenTile{entry_for(key, header, bytes.size()), header.stats, false};
-  }
-
-  static tiles::IndexEntry entry_for(const TileKey& key, const tiles::TileHeader& h, size_t bytes) {
-    return {key, static_cast<float>(h.stats.min), static_cast<float>(h.stats.max),
-            static_cast<uint32_t>(h.stats.valid_count), static_cast<uint32_t>(bytes)};
+    return WrittenTile{tiles::index_entry_for(key, header, bytes.size()), header.stats, false};
   }
 
   tiles::Manifest make_manifest(const tiles::SampleStats& stats) {
@@ -483,28 +478,9 @@ class Builder {
     std::sort(tiles.begin(), tiles.end(), [](const auto& a, const auto& b) {
       return std::tie(a.first.y, a.first.x) < std::tie(b.first.y, b.first.x);
     });
-    const double channels = type_ == tiles::SampleType::UInt8 ? 3 : 1;
-    double count = 0, sum = 0, sum_sq = 0;
-    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-    uint64_t valid = 0;
-    for (const auto& [key, t] : tiles) {
-      if (t.valid_count == 0) continue;
-      const double n = static_cast<double>(t.valid_count) * channels;
-      count += n;
-      sum += t.mean * n;
-      sum_sq += (t.stddev * t.stddev + t.mean * t.mean) * n;
-      lo = std::min(lo, t.min);
-      hi = std::max(hi, t.max);
-      valid += t.valid_count;
-    }
-    tiles::SampleStats s;
-    if (count == 0) return s;
-    s.min = lo;
-    s.max = hi;
-    s.mean = sum / count;
-    s.stddev = std::sqrt(std::max(0.0, sum_sq / count - s.mean * s.mean));
-    s.valid_count = valid;
-    return s;
+    std::vector<tiles::SampleStats> parts;
+    for (const auto& t : tiles) parts.push_back(t.second);
+    return tiles::combine_stats(parts, type_ == tiles::SampleType::UInt8 ? 3 : 1);
   }
 
   const BuildOptions& o_;

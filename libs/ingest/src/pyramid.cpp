@@ -74,37 +74,4 @@ tiles::Raster downsample(const std::array<const tiles::Raster*, 4>& children, in
   return parent;
 }
 
-tiles::Raster assemble_bordered(const std::array<const tiles::Raster*, 9>& neighbours, int width,
-                                int height, int border, tiles::SampleType type) {
-  assert(border <= width && border <= height);
-  tiles::Raster out = tiles::Raster::empty(type, width + 2 * border, height + 2 * border);
-  // Source start and destination start along one axis for offsets -1, 0, +1.
-  auto span = [border](int d, int size, int& src, int& dst, int& len) {
-    if (d < 0) {
-      src = size - border;
-      dst = 0;
-      len = border;
-    } else if (d == 0) {
-      src = 0;
-      dst = border;
-      len = size;
-    } else {
-      src = 0;
-      dst = border + size;
-      len = border;
-    }
-  };
-  for (int dy = -1; dy <= 1; ++dy) {
-    for (int dx = -1; dx <= 1; ++dx) {
-      const tiles::Raster* n = neighbours[static_cast<size_t>((dy + 1) * 3 + dx + 1)];
-      if (!n || (border == 0 && (dx || dy))) continue;
-      int sx, tx, w, sy, ty, h;
-      span(dx, width, sx, tx, w);
-      span(dy, height, sy, ty, h);
-      out.copy_from(*n, sx, sy, tx, ty, w, h);
-    }
-  }
-  return out;
-}
-
 }  // namespace relief::ingest

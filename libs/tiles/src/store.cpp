@@ -91,6 +91,11 @@ Result<std::optional<float>> Store::sample(double lon, double lat, int level) co
   return std::optional<float>(v);
 }
 
+IndexEntry index_entry_for(const geo::TileKey& key, const TileHeader& h, size_t file_bytes) {
+  return {key, static_cast<float>(h.stats.min), static_cast<float>(h.stats.max),
+          static_cast<uint32_t>(h.stats.valid_count), static_cast<uint32_t>(file_bytes)};
+}
+
 Status write_tile_file(const fs::path& root, const geo::TileKey& key,
                        std::span<const std::byte> bytes) {
   return write_file_atomic(root / tile_relative_path(key), bytes);

@@ -38,6 +38,9 @@ class Store {
   std::vector<LevelIndex> indices_;
 };
 
+// The index record of a tile file with this header and size.
+IndexEntry index_entry_for(const geo::TileKey& key, const TileHeader& header, size_t file_bytes);
+
 Status write_tile_file(const std::filesystem::path& root, const geo::TileKey& key,
                        std::span<const std::byte> bytes);
 Status write_level_index(const std::filesystem::path& root, const LevelIndex& index);

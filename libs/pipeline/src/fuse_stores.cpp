@@ -1,0 +1,155 @@
+#include "relief/pipeline/fuse_stores.h"
+
+#include <algorithm>
+#include <set>
+
+#include <fmt/format.h>
+
+#include "first_error.h"
+#include "store_output.h"
+
+namespace relief::pipeline {
+namespace {
+
+namespace fs = std::filesystem;
+
+Status check_compatible(const tiles::Manifest& first, const tiles::Manifest& m,
+                        const fs::path& name) {
+  if (m.kind != first.kind) {
+    return fail(fmt::format("{}: holds {} data, the first input {}", name.string(),
+                            tiles::to_string(m.kind), tiles::to_string(first.kind)));
+  }
+  if (m.sample_type != first.sample_type || m.tile_log2_height != first.tile_log2_height ||
+      m.border != first.border) {
+    return fail(fmt::format("{}: tile size, border or sample type differs from the first input",
+                            name.string()));
+  }
+  return {};
+}
+
+// Blends float samples: weighted mean (or first valid) of the valid inputs.
+void fuse_float(const std::vector<const tiles::Raster*>& in, const std::vector<double>& weights,
+                FuseMode mode, tiles::Raster& out) {
+  auto dst = out.f32();
+  for (size_t s = 0; s < dst.size(); ++s) {
+    double sum = 0, wsum = 0;
+    for (size_t i = 0; i < in.size(); ++i) {
+      if (!in[i]) continue;
+      const float v = in[i]->f32()[s];
+      if (std::isnan(v)) continue;
+      sum += weights[i] * v;
+      wsum += weights[i];
+      if (mode == FuseMode::First) break;
+    }
+    dst[s] = wsum > 0 ? static_cast<float>(sum / wsum) : NAN;
+  }
+}
+
+// RGBA: colours weighted by weight * alpha; alpha the largest of the inputs'.
+void fuse_rgba(const std::vector<const tiles::Raster*>& in, const std::vector<double>& weights,
+               FuseMode mode, tiles::Raster& out) {
+  auto dst = out.u8();
+  for (size_t p = 0; p < out.pixel_count(); ++p) {
+    double sum[3] = {0, 0, 0}, wsum = 0;
+    uint8_t alpha = 0;
+    for (size_t i = 0; i < in.size(); ++i) {
+      if (!in[i]) continue;
+      const uint8_t* px = &in[i]->u8()[p * 4];
+      if (px[3] == 0) continue;
+      const double w = weights[i] * px[3];
+      for (int c = 0; c < 3; ++c) sum[c] += w * px[c];
+      wsum += w;
+      alpha = std::max(alpha, px[3]);
+      if (mode == FuseMode::First) break;
+    }
+    for (int c = 0; c < 3; ++c) {
+      dst[p * 4 + c] = wsum > 0 ? static_cast<uint8_t>(std::lround(sum[c] / wsum)) : 0;
+    }
+    dst[p * 4 + 3] = alpha;
+  }
+}
+
+}  // namespace
+
+Result<FuseReport> fuse_stores(const FuseOptions& o, Executor& executor, Progress& progress) {
+  if (o.inputs.size() < 2) return fail("fuse: needs at least two input stores");
+  std::vector<double> weights = o.weights;
+  if (weights.empty()) weights.assign(o.inputs.size(), 1.0);
+  if (weights.size() != o.inputs.size()) {
+    return fail(
+        fmt::format("--weights: {} weights for {} inputs", weights.size(), o.inputs.size()));
+  }
+  for (double w : weights) {
+    if (!(w > 0) || !std::isfinite(w)) return fail(fmt::format("--weights: {} is not > 0", w));
+  }
+  std::vector<tiles::Store> stores;
+  for (const auto& path : o.inputs) {
+    stores.push_back(RELIEF_TRY(tiles::Store::open(path)));
+    RELIEF_CHECK(check_compatible(stores.front().manifest(), stores.back().manifest(), path));
+  }
+  tiles::Manifest manifest = stores.front().manifest();
+  for (const auto& s : stores) {
+    const tiles::Manifest& m = s.manifest();
+    manifest.min_level = std::min(manifest.min_level, m.min_level);
+    manifest.max_level = std::max(manifest.max_level, m.max_level);
+    manifest.extent.west = std::min(manifest.extent.west, m.extent.west);
+    manifest.extent.south = std::min(manifest.extent.south, m.extent.south);
+    manifest.extent.east = std::max(manifest.extent.east, m.extent.east);
+    manifest.extent.north = std::max(manifest.extent.north, m.extent.north);
+  }
+  manifest.sources.clear();
+  for (const auto& s : stores) {
+    for (const auto& src : s.manifest().sources) manifest.sources.push_back(src);
+  }
+  manifest.created_by = "relief fuse";
+  StoreOutput output =
+      RELIEF_TRY(StoreOutput::create(o.output, manifest.min_level, manifest.max_level));
+  const int border = manifest.border;
+  const geo::TileGrid& grid = stores.front().grid();
+
+  for (int level = manifest.min_level; level <= manifest.max_level; ++level) {
+    std::set<geo::TileKey> union_keys;
+    for (const auto& s : stores) {
+      for (const auto& e : s.index(level).entries()) union_keys.insert(e.key);
+    }
+    const std::vector<geo::TileKey> keys(union_keys.begin(), union_keys.end());
+    progress.begin(fmt::format("fuse level {}", level), keys.size());
+    FirstError error;
+    executor.parallel_for(keys.size(), [&](size_t k) {
+      const geo::TileKey& key = keys[k];
+      std::vector<tiles::Tile> held;
+      held.reserve(stores.size());
+      std::vector<const tiles::Raster*> rasters(stores.size(), nullptr);
+      // The fused bounds lie within the inputs' bounds: no scan needed.
+      tiles::IndexEntry bounds{key, INFINITY, -INFINITY, 0, 0};
+      for (size_t i = 0; i < stores.size(); ++i) {
+        const tiles::IndexEntry* e = stores[i].index(level).find(key);
+        if (!e) continue;
+        auto tile = stores[i].read_tile(key);
+        if (!tile) return error.record(tile.error());
+        held.push_back(std::move(*tile));
+        rasters[i] = &held.back().raster;
+        bounds.min = std::min(bounds.min, e->min);
+        bounds.max = std::max(bounds.max, e->max);
+      }
+      tiles::Raster fused =
+          tiles::Raster::empty(manifest.sample_type, grid.padded_width(), grid.padded_height());
+      if (manifest.sample_type == tiles::SampleType::Float32) {
+        fuse_float(rasters, weights, o.mode, fused);
+      } else {
+        fuse_rgba(rasters, weights, o.mode, fused);
+      }
+      if (auto st = output.write(key, fused, border, manifest.codec, &bounds); !st) {
+        error.record(st.error());
+      }
+      progress.advance();
+    });
+    progress.end();
+    RELIEF_CHECK(error.status());
+  }
+  const FuseReport report{output.tiles_written(), manifest.max_level - manifest.min_level + 1};
+  RELIEF_CHECK(output.finish(std::move(manifest)));
+  return report;
+}
+
+}  // namespace relief::pipeline
