@@ -20,6 +20,7 @@ commands:
   export   reassemble one level of a store into a GeoTIFF
   process  run an operator (speckle filter, dynamic-range reduction, ...) over a GeoTIFF or a store
   fuse     combine stores of one kind tile by tile (weighted blend or void filling)
+  detect   find point targets in a SAR image: GeoJSON, analysis JSON and plot
 
 Run 'relief <command> --help' for the options of a command.
 )";
@@ -64,6 +65,7 @@ int main(int argc, char** argv) {
     if (command == "export") return relief::cli::run_export(args);
     if (command == "process") return relief::cli::run_process(args);
     if (command == "fuse") return relief::cli::run_fuse(args);
+    if (command == "detect") return relief::cli::run_detect(args);
     if (command == "--version") {
       std::puts("relief 0.1.0");
       return 0;

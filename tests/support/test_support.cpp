@@ -1,5 +1,7 @@
 #include "test_support.h"
 
+#include <algorithm>
+
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -90,6 +92,11 @@ std::vector<fs::path> temporary_files(const fs::path& dir) {
     if (it->is_regular_file() && is_temporary_file(it->path())) found.push_back(it->path());
   }
   return found;
+}
+
+bool is_one_line_error(const RunResult& r, const std::string& needle) {
+  return r.exit_code != 0 && std::count(r.err.begin(), r.err.end(), '\n') == 1 &&
+         r.err.find(needle) != std::string::npos;
 }
 
 }  // namespace relief::testing

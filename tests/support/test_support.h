@@ -38,6 +38,9 @@ int spawn_relief(const std::vector<std::string>& args);
 // by a shell snippet (e.g. "ulimit -f 100;").
 RunResult run_relief(const std::vector<std::string>& args, const std::string& shell_prefix = "");
 
+// Whether `r` failed with a one-line error on stderr that contains `needle`.
+bool is_one_line_error(const RunResult& r, const std::string& needle);
+
 // Files below `dir` whose names mark an interrupted atomic write.
 std::vector<std::filesystem::path> temporary_files(const std::filesystem::path& dir);
 

@@ -1,5 +1,9 @@
 #include "gdal_env.h"
 
+#include <algorithm>
+#include <filesystem>
+#include <limits>
+
 #include <cpl_conv.h>
 #include <cpl_error.h>
 
@@ -52,6 +56,51 @@ std::optional<std::string> finish_atomic_write(Dataset& out, const std::string& 
     const std::string reason = std::strerror(errno);
     ::unlink(tmp.c_str());
     return final_path + ": cannot rename into place: " + reason;
+  }
+  return std::nullopt;
+}
+
+Result<SingleBand> open_single_band(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) {
+    return fail(path + ": is a directory, not a raster");
+  }
+  Dataset ds = open_raster(path);
+  if (!ds) return fail(path + ": " + gdal_error("not a raster GDAL can read"));
+  if (const int bands = GDALGetRasterCount(ds.get()); bands != 1) {
+    return fail(path + ": has " + std::to_string(bands) + " bands; expected one");
+  }
+  GDALRasterBandH band = GDALGetRasterBand(ds.get(), 1);
+  if (GDALDataTypeIsComplex(GDALGetRasterDataType(band))) {
+    return fail(path + ": unsupported data type " +
+                GDALGetDataTypeName(GDALGetRasterDataType(band)) +
+                " (complex; convert to amplitude first)");
+  }
+  return SingleBand{std::move(ds), band};
+}
+
+std::optional<std::string> read_padded(GDALRasterBandH band, int x0, int y0, int w, int h,
+                                       int margin, std::vector<float>& out,
+                                       const std::string& name) {
+  const int width = GDALGetRasterBandXSize(band), height = GDALGetRasterBandYSize(band);
+  const int padded_w = w + 2 * margin, padded_h = h + 2 * margin;
+  out.assign(static_cast<size_t>(padded_w) * padded_h, std::numeric_limits<float>::quiet_NaN());
+  const int rx0 = std::max(0, x0 - margin), rx1 = std::min(width, x0 + w + margin);
+  const int ry0 = std::max(0, y0 - margin), ry1 = std::min(height, y0 + h + margin);
+  if (rx1 <= rx0 || ry1 <= ry0) return std::nullopt;
+  float* dst =
+      out.data() + static_cast<size_t>(ry0 - (y0 - margin)) * padded_w + (rx0 - (x0 - margin));
+  if (GDALRasterIO(band, GF_Read, rx0, ry0, rx1 - rx0, ry1 - ry0, dst, rx1 - rx0, ry1 - ry0,
+                   GDT_Float32, 0, static_cast<GSpacing>(padded_w) * 4) != CE_None) {
+    return name + ": read failed: " + gdal_error("GDAL");
+  }
+  int has_nodata = 0;
+  const double nodata = GDALGetRasterNoDataValue(band, &has_nodata);
+  if (has_nodata) {
+    const float nd = static_cast<float>(nodata);
+    for (float& v : out) {
+      if (v == nd) v = std::numeric_limits<float>::quiet_NaN();
+    }
   }
   return std::nullopt;
 }

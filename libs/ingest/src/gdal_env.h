@@ -6,6 +6,9 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
+
+#include "relief/base/result.h"
 
 namespace relief::ingest {
 
@@ -27,6 +30,22 @@ using Dataset = std::unique_ptr<std::remove_pointer_t<GDALDatasetH>, DatasetClos
 
 // Opens a raster read-only; nullptr on failure (see gdal_error()).
 Dataset open_raster(const std::string& path);
+
+// Reads the window [x0 - margin, x0 + w + margin) x [y0 - margin, y0 + h + margin)
+// of a band as Float32 into `out` (row stride w + 2 margin); samples outside
+// the raster and the band's nodata value become NaN. Returns an error naming
+// `name` on failure.
+std::optional<std::string> read_padded(GDALRasterBandH band, int x0, int y0, int w, int h,
+                                       int margin, std::vector<float>& out,
+                                       const std::string& name);
+
+// Opens a raster that must have exactly one real-valued band (amplitudes,
+// elevations); the errors name `path`.
+struct SingleBand {
+  Dataset dataset;
+  GDALRasterBandH band = nullptr;
+};
+Result<SingleBand> open_single_band(const std::string& path);
 
 // Closes `out` (written at `tmp`), which flushes it, and renames it to
 // `final_path`; on any failure (a full disk shows up at the flush) the

@@ -27,24 +27,7 @@ Result<ProcessRasterReport> process_raster(const ProcessRasterOptions& o, Execut
   const process::Params params = RELIEF_TRY(process::parse_params(*op, o.params));
   const int margin = process::margin_of(*op, params);
 
-  std::error_code ec;
-  if (std::filesystem::is_directory(o.input, ec)) {
-    return fail(
-        fmt::format("{}: is a directory; relief process reads rasters (processing stores "
-                    "is not available yet)",
-                    o.input));
-  }
-  Dataset in = open_raster(o.input);
-  if (!in) return fail(fmt::format("{}: {}", o.input, gdal_error("not a raster GDAL can read")));
-  if (GDALGetRasterCount(in.get()) != 1) {
-    return fail(fmt::format("{}: has {} bands; operators work on one band", o.input,
-                            GDALGetRasterCount(in.get())));
-  }
-  GDALRasterBandH band = GDALGetRasterBand(in.get(), 1);
-  if (GDALDataTypeIsComplex(GDALGetRasterDataType(band))) {
-    return fail(fmt::format("{}: unsupported data type {} (complex; convert to amplitude first)",
-                            o.input, GDALGetDataTypeName(GDALGetRasterDataType(band))));
-  }
+  auto [in, band] = RELIEF_TRY(open_single_band(o.input));
   const int width = GDALGetRasterXSize(in.get()), height = GDALGetRasterYSize(in.get());
   // Global operators see the statistics of the whole raster (one scan, nodata left out).
   std::optional<process::GlobalStats> stats;
@@ -58,8 +41,6 @@ Result<ProcessRasterReport> process_raster(const ProcessRasterOptions& o, Execut
     }
     stats = g;
   }
-  int has_nodata = 0;
-  const double nodata = GDALGetRasterNoDataValue(band, &has_nodata);
 
   // Strips of output rows sized so input and output buffers use at most half
   // the budget (GDAL's cache takes an eighth).
@@ -98,20 +79,8 @@ Result<ProcessRasterReport> process_raster(const ProcessRasterOptions& o, Execut
   for (int y0 = 0; y0 < height; y0 += strip) {
     const int rows = std::min(strip, height - y0);
     // Input rows [y0 - margin, y0 + rows + margin); outside the image is nodata.
-    input_rows.assign(static_cast<size_t>(padded_width) * (rows + 2 * margin),
-                      std::numeric_limits<float>::quiet_NaN());
-    const int read0 = std::max(0, y0 - margin), read1 = std::min(height, y0 + rows + margin);
-    float* dst =
-        input_rows.data() + static_cast<size_t>(read0 - (y0 - margin)) * padded_width + margin;
-    if (GDALRasterIO(band, GF_Read, 0, read0, width, read1 - read0, dst, width, read1 - read0,
-                     GDT_Float32, 0, static_cast<GSpacing>(padded_width) * 4) != CE_None) {
-      return discard(fmt::format("{}: read failed: {}", o.input, gdal_error("GDAL")));
-    }
-    if (has_nodata) {
-      const float nd = static_cast<float>(nodata);
-      for (float& v : input_rows) {
-        if (v == nd) v = std::numeric_limits<float>::quiet_NaN();
-      }
+    if (auto error = read_padded(band, 0, y0, width, rows, margin, input_rows, o.input)) {
+      return discard(*error);
     }
     output_rows.resize(static_cast<size_t>(width) * rows);
     const process::ConstView in_view{input_rows.data(), padded_width, rows + 2 * margin,
