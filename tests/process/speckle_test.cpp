@@ -86,6 +86,38 @@ TEST(Speckle, MatchesScalarReferenceOnRealSar) {
   }
 }
 
+TEST(Speckle, GaussAndMedianMatchScalarReferences) {
+  const Image in = umbra_crop(1200, 600, 90, 70);
+  ThreadExecutor ex(2);
+  for (int r : {1, 3, 6}) {
+    SCOPED_TRACE(r);
+    const std::string radius = "radius=" + std::to_string(r);
+    const Image gauss = run("gauss", {radius}, in, ex);
+    const Image median = run("median", {radius}, in, ex);
+    const double sigma = r / 2.5;
+    for (int y = 0; y < gauss.height; ++y) {
+      for (int x = 0; x < gauss.width; ++x) {
+        double s = 0, w = 0;
+        std::vector<float> window;
+        for (int dy = -r; dy <= r; ++dy) {
+          for (int dx = -r; dx <= r; ++dx) {
+            const double k = std::exp(-0.5 * (dx * dx + dy * dy) / (sigma * sigma));
+            const float v = in.at(x + r + dx, y + r + dy);
+            s += k * v;
+            w += k;
+            window.push_back(v);
+          }
+        }
+        ASSERT_NEAR(gauss.at(x, y), s / w, 1e-4 * std::max(1.0, s / w));
+        if (r <= 3) {  // exact median; above, the documented separable approximation
+          std::nth_element(window.begin(), window.begin() + window.size() / 2, window.end());
+          ASSERT_EQ(median.at(x, y), window[window.size() / 2]);
+        }
+      }
+    }
+  }
+}
+
 TEST(Speckle, ConstantImageIsReturnedUnchanged) {
   Image in{40, 30, std::vector<float>(1200, 42.5f)};
   InlineExecutor ex;

@@ -19,6 +19,7 @@
 #include "gdal_env.h"
 #include "pyramid.h"
 #include "relief/base/file_io.h"
+#include "relief/base/first_error.h"
 #include "relief/tiles/store.h"
 #include "relief/tiles/store_layout.h"
 #include "source.h"
@@ -33,26 +34,6 @@ namespace {
 constexpr const char* kBuildDir = ".build";
 constexpr const char* kStateName = "state.json";
 constexpr int kMaxSupportedLevel = 24;
-
-// The first error raised by any worker; later work is skipped once set.
-class FirstError {
- public:
-  void set(Error e) {
-    std::lock_guard lock(mutex_);
-    if (!error_) error_ = std::move(e);
-    failed_ = true;
-  }
-  bool failed() const { return failed_; }
-  Status status() const {
-    if (error_) return std::unexpected(*error_);
-    return {};
-  }
-
- private:
-  std::mutex mutex_;
-  std::optional<Error> error_;
-  std::atomic<bool> failed_{false};
-};
 
 // Everything that determines the output. A resumed build must match it exactly.
 std::string fingerprint(const BuildOptions& o, const tiles::CodecOptions& codec, int min_level,

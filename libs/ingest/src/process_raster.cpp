@@ -28,6 +28,11 @@ Result<ProcessRasterReport> process_raster(const ProcessRasterOptions& o, Execut
   const int margin = process::margin_of(*op, params);
 
   auto [in, band] = RELIEF_TRY(open_single_band(o.input));
+  // 8- and 16-bit samples are small integers: no need to scan for it.
+  const GDALDataType type = GDALGetRasterDataType(band);
+  const std::optional<bool> small_integers =
+      type == GDT_Byte || type == GDT_UInt16 || type == GDT_Int16 ? std::optional<bool>(true)
+                                                                  : std::nullopt;
   const int width = GDALGetRasterXSize(in.get()), height = GDALGetRasterYSize(in.get());
   // Global operators see the statistics of the whole raster (one scan, nodata left out).
   std::optional<process::GlobalStats> stats;
@@ -44,10 +49,12 @@ Result<ProcessRasterReport> process_raster(const ProcessRasterOptions& o, Execut
 
   // Strips of output rows sized so input and output buffers use at most half
   // the budget (GDAL's cache takes an eighth).
-  GDALSetCacheMax64(static_cast<GIntBig>(o.memory_budget / 8));
+  GDALSetCacheMax64(static_cast<GIntBig>(std::min<uint64_t>(o.memory_budget / 8, 16 << 20)));
   const uint64_t row_bytes = static_cast<uint64_t>(width + 2 * margin) * 4 * 2;
+  // Strips of at most 256 rows keep the buffers in cache and reused; the
+  // margin rows read twice cost little.
   const int strip =
-      static_cast<int>(std::clamp<uint64_t>(o.memory_budget / 2 / row_bytes, 16, 4096));
+      static_cast<int>(std::clamp<uint64_t>(o.memory_budget / 2 / row_bytes, 16, 256));
 
   const std::string tmp = o.output.string() + std::string(kTempMarker) + std::to_string(::getpid());
   if (o.compress != "none" && o.compress != "deflate" && o.compress != "zstd") {
@@ -87,7 +94,7 @@ Result<ProcessRasterReport> process_raster(const ProcessRasterOptions& o, Execut
                                      padded_width,      -margin,      y0 - margin};
     const process::MutView out_view{output_rows.data(), width, rows, width, 0, y0};
     if (auto st = process::run_operator(*op, params, in_view, out_view, executor,
-                                        stats ? &*stats : nullptr);
+                                        stats ? &*stats : nullptr, small_integers);
         !st) {
       return discard(st.error().message);
     }

@@ -5,7 +5,7 @@
 
 #include <fmt/format.h>
 
-#include "first_error.h"
+#include "relief/base/first_error.h"
 #include "store_output.h"
 
 namespace relief::pipeline {
@@ -126,7 +126,7 @@ Result<FuseReport> fuse_stores(const FuseOptions& o, Executor& executor, Progres
         const tiles::IndexEntry* e = stores[i].index(level).find(key);
         if (!e) continue;
         auto tile = stores[i].read_tile(key);
-        if (!tile) return error.record(tile.error());
+        if (!tile) return error.set(tile.error());
         held.push_back(std::move(*tile));
         rasters[i] = &held.back().raster;
         bounds.min = std::min(bounds.min, e->min);
@@ -140,7 +140,7 @@ Result<FuseReport> fuse_stores(const FuseOptions& o, Executor& executor, Progres
         fuse_rgba(rasters, weights, o.mode, fused);
       }
       if (auto st = output.write(key, fused, border, manifest.codec, &bounds); !st) {
-        error.record(st.error());
+        error.set(st.error());
       }
       progress.advance();
     });

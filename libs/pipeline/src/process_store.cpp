@@ -6,7 +6,7 @@
 
 #include <fmt/format.h>
 
-#include "first_error.h"
+#include "relief/base/first_error.h"
 #include "relief/process/operators.h"
 #include "store_output.h"
 #include "tile_reader.h"
@@ -71,7 +71,7 @@ Result<ProcessStoreReport> process_store(const ProcessStoreOptions& o, Executor&
       if (error.failed()) return;
       const geo::TileKey key = entries[i].key;
       auto window = reader.window(key, border + margin);
-      if (!window) return error.record(window.error());
+      if (!window) return error.set(window.error());
       const int w = window->width(), h = window->height();
       const int64_t x0 = int64_t{key.x} * grid.width() - border - margin;
       const int64_t y0 = int64_t{key.y} * grid.height() - border - margin;
@@ -81,10 +81,10 @@ Result<ProcessStoreReport> process_store(const ProcessStoreOptions& o, Executor&
                                  result.width(),      x0 + margin,    y0 + margin};
       InlineExecutor inline_executor;
       auto st = process::run_operator(*op, level_params, in, out, inline_executor, &stats);
-      if (!st) return error.record(st.error());
+      if (!st) return error.set(st.error());
       if (result.stats(border, border, grid.width(), grid.height()).valid_count > 0) {
         if (auto w_st = output.write(key, result, border, codec); !w_st) {
-          return error.record(w_st.error());
+          return error.set(w_st.error());
         }
       }
       progress.advance();

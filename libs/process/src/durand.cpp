@@ -38,7 +38,7 @@ class RangeWeights {
 void durand_kernel(ConstView in, MutView out, const KernelContext& c, int y0, int y1) {
   const int r = c.ip("radius");
   const double k = c.p("k"), scale = 1 / c.stats.max;
-  const double sigma_s = std::max(0.5, r / 2.5);
+  const double sigma_s = r > 0 ? r / 2.5 : 1.0;  // r = 0: the sample alone
   std::vector<double> spatial;
   for (int dy = -r; dy <= r; ++dy) {
     for (int dx = -r; dx <= r; ++dx) {

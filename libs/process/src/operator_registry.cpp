@@ -232,7 +232,8 @@ Params scale_params(const OperatorSpec& op, const Params& params, double factor)
 }
 
 Status run_operator(const OperatorSpec& op, const Params& params, ConstView input, MutView output,
-                    Executor& executor, const GlobalStats* stats) {
+                    Executor& executor, const GlobalStats* stats,
+                    std::optional<bool> small_integers) {
   const Entry* e = find_entry(op.name);
   assert(e);
   const int m = margin_of(op, params);
@@ -267,7 +268,7 @@ Status run_operator(const OperatorSpec& op, const Params& params, ConstView inpu
     }
     return {};
   }
-  if (m > 0) context.integral_input = all_small_integers(input);
+  if (m > 0) context.integral_input = small_integers ? *small_integers : all_small_integers(input);
   constexpr int kRowsPerTask = 32;
   const int tasks = (output.height + kRowsPerTask - 1) / kRowsPerTask;
   executor.parallel_for(static_cast<size_t>(tasks), [&](size_t t) {

@@ -145,7 +145,9 @@ void frost_filter(ConstView in, MutView out, const SpeckleParams& p, int y0, int
 
 void gauss_filter(ConstView in, MutView out, const SpeckleParams& p, int y0, int y1) {
   const int r = p.radius;
-  const double sigma = p.sigma > 0 ? p.sigma : std::max(0.5, r / 2.5);
+  // sigma = r / 2.5 puts almost all of the mass inside the mask (seed 003 §2.2.5);
+  // r = 0 (a coarse level) is a one-sample mask whatever sigma.
+  const double sigma = p.sigma > 0 ? p.sigma : (r > 0 ? r / 2.5 : 1.0);
   std::vector<double> kernel(static_cast<size_t>(2 * r + 1));
   for (int k = -r; k <= r; ++k) kernel[k + r] = std::exp(-0.5 * k * k / (sigma * sigma));
   // Separable: vertical weighted sums (values and weights of valid samples),

@@ -2,6 +2,7 @@
 // The operator catalogue: names, parameters with ranges and defaults, and what
 // each expects as input. `relief process --list` prints it.
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -54,8 +55,11 @@ Params scale_params(const OperatorSpec& op, const Params& params, double factor)
 // Runs the operator: `input` extends margin_of() samples beyond `output` on
 // every side. NaN is nodata in and out. Rows are spread over the executor.
 // `stats` are the dataset's global statistics; operators that need them fail
-// without them.
+// without them. `small_integers` says whether every valid input is an integer
+// of magnitude <= 2^20 when the caller knows (an 8- or 16-bit source);
+// otherwise the input is scanned (window_stats.h).
 Status run_operator(const OperatorSpec& op, const Params& params, ConstView input, MutView output,
-                    Executor& executor, const GlobalStats* stats = nullptr);
+                    Executor& executor, const GlobalStats* stats = nullptr,
+                    std::optional<bool> small_integers = std::nullopt);
 
 }  // namespace relief::process
