@@ -1,12 +1,23 @@
 #!/usr/bin/env bash
 # The main job on bundled data: builds relief, turns the SRTM tiles of the
-# eastern Pyrenees and Catalonia into a tile pyramid, verifies it and describes it.
+# eastern Pyrenees and Catalonia into a tile pyramid, verifies it and describes
+# it; then builds the Umbra SAR image into a store, reduces its speckle and
+# dynamic range on every level, and detects point targets.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/build.sh
 BUILD_DIR=${RELIEF_BUILD_DIR:-build}
+RELIEF="$BUILD_DIR/apps/relief/relief"
 OUT=${1:-out/pyrenees}
-"$BUILD_DIR/apps/relief/relief" build data/srtm/N41E001.hgt.zip data/srtm/N42E001.hgt.zip \
+"$RELIEF" build data/srtm/N41E001.hgt.zip data/srtm/N42E001.hgt.zip \
   -o "$OUT" --kind elevation --overwrite
-"$BUILD_DIR/apps/relief/relief" verify "$OUT"
-"$BUILD_DIR/apps/relief/relief" info "$OUT"
+"$RELIEF" verify "$OUT"
+"$RELIEF" info "$OUT"
+
+SAR=$(dirname "$OUT")/umbra
+rm -rf "$SAR" "$SAR-lee" "$SAR-grey"
+"$RELIEF" build data/sar/umbra_mount_yasur.tif -o "$SAR" --kind sar
+"$RELIEF" process "$SAR" -o "$SAR-lee" --op lee --param radius=2
+"$RELIEF" process "$SAR-lee" -o "$SAR-grey" --op ext-schlick --param d=0.7
+"$RELIEF" detect data/sar/umbra_mount_yasur.tif -o "$SAR-targets.geojson" \
+  --analysis "$SAR-target.json" --plot "$SAR-target.png"
