@@ -75,4 +75,27 @@ Result<std::optional<double>> Args::get_double(const std::string& name) const {
   return std::optional<double>(value);
 }
 
+Result<std::vector<double>> parse_numbers(const std::string& option, const std::string& text,
+                                          size_t count) {
+  std::vector<double> out;
+  size_t start = 0;
+  for (;;) {
+    const size_t comma = text.find(',', start);
+    const std::string item = text.substr(start, comma == std::string::npos ? comma : comma - start);
+    double v = 0;
+    auto [ptr, ec] = std::from_chars(item.data(), item.data() + item.size(), v);
+    if (item.empty() || ec != std::errc() || ptr != item.data() + item.size() ||
+        !std::isfinite(v)) {
+      return fail(fmt::format("{}: '{}' is not a number", option, item));
+    }
+    out.push_back(v);
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  if (count && out.size() != count) {
+    return fail(fmt::format("{}: expected {} comma-separated numbers", option, count));
+  }
+  return out;
+}
+
 }  // namespace relief::cli

@@ -35,4 +35,8 @@ class Args {
   std::vector<std::string> positional_;
 };
 
+// "1,2.5,-3" as numbers; `count` > 0 requires exactly that many. Errors name `option`.
+Result<std::vector<double>> parse_numbers(const std::string& option, const std::string& text,
+                                          size_t count = 0);
+
 }  // namespace relief::cli

@@ -1,5 +1,4 @@
 #include <cstdio>
-#include <sstream>
 
 #include "args.h"
 #include "commands.h"
@@ -24,23 +23,6 @@ options:
   -q, --quiet          no progress bar
 )";
 
-Result<std::vector<double>> parse_weights(const std::string& text) {
-  std::vector<double> out;
-  std::stringstream in(text);
-  std::string item;
-  while (std::getline(in, item, ',')) {
-    size_t used = 0;
-    double v = 0;
-    try {
-      v = std::stod(item, &used);
-    } catch (...) {
-      used = 0;
-    }
-    if (used == 0 || used != item.size()) return fail("--weights: '" + item + "' is not a number");
-    out.push_back(v);
-  }
-  return out;
-}
 }  // namespace
 
 int run_fuse(const std::vector<std::string>& argv) {
@@ -55,7 +37,7 @@ int run_fuse(const std::vector<std::string>& argv) {
   for (const auto& p : args->positional()) o.inputs.emplace_back(p);
   o.output = *args->get("--output");
   if (auto w = args->get("--weights")) {
-    auto weights = parse_weights(*w);
+    auto weights = parse_numbers("--weights", *w);
     if (!weights) return report_error(weights.error().message);
     o.weights = *weights;
   }

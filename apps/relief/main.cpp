@@ -21,6 +21,7 @@ commands:
   process  run an operator (speckle filter, dynamic-range reduction, ...) over a GeoTIFF or a store
   fuse     combine stores of one kind tile by tile (weighted blend or void filling)
   detect   find point targets in a SAR image: GeoJSON, analysis JSON and plot
+  render   render a still of an elevation store (headless OpenGL), optionally with imagery
 
 Run 'relief <command> --help' for the options of a command.
 )";
@@ -66,6 +67,7 @@ int main(int argc, char** argv) {
     if (command == "process") return relief::cli::run_process(args);
     if (command == "fuse") return relief::cli::run_fuse(args);
     if (command == "detect") return relief::cli::run_detect(args);
+    if (command == "render") return relief::cli::run_render(args);
     if (command == "--version") {
       std::puts("relief 0.1.0");
       return 0;

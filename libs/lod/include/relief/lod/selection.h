@@ -1,0 +1,60 @@
+#pragma once
+// Level-of-detail selection (seed 003 §1.4.2): walk the quadtree from level 0,
+// bound each quad from metadata and cached error bounds, cull by the frustum
+// and by the ellipsoid's horizon, split a quad while its mesh error projected
+// at its nearest point exceeds the pixel-error threshold, then enforce the
+// restricted property (quads sharing an edge or a corner differ by at most one
+// level), which makes the meshes conform.
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include "relief/base/result.h"
+#include "relief/lod/camera.h"
+#include "relief/lod/terrain_model.h"
+
+namespace relief::lod {
+
+struct SelectionOptions {
+  double pixel_error = 1.0;  // largest allowed screen-space error, pixels
+  // Every quad at the deepest level instead (every finest sample a vertex):
+  // the brute-force reference.
+  bool full_resolution = false;
+  size_t max_quads = 200000;
+};
+
+struct SelectedQuad {
+  geo::TileKey key;
+  uint8_t finer_sides = 0;     // Side bits: neighbours one level finer (split border triangles)
+  uint8_t coarse_sides = 0;    // Side bits: neighbours one level coarser (take parent data)
+  uint8_t coarse_corners = 0;  // Corner bits: a quad sharing the corner is coarser
+  double error_pixels = 0;     // the bound that stopped the split
+};
+
+struct SelectionStats {
+  std::vector<uint32_t> quads_per_level;
+  uint64_t triangles = 0;
+  uint32_t quads = 0;
+  uint32_t culled = 0;
+  double seconds = 0;
+  double max_error_pixels = 0;
+};
+
+struct Selection {
+  std::vector<SelectedQuad> quads;  // visible leaves, in no particular order
+  SelectionStats stats;
+};
+
+Result<Selection> select_quads(const View& view, TerrainModel& terrain,
+                               const SelectionOptions& options);
+
+// The restricted quadtree over the whole globe that `split` (quad -> split
+// it?) asks for, then restricted like a selection: for tests and tools.
+Result<Selection> restricted_quadtree(TerrainModel& terrain,
+                                      const std::function<bool(const geo::TileKey&)>& split);
+
+// Whether the point is hidden behind the ellipsoid (shrunk by `below` metres)
+// seen from the eye.
+bool below_horizon(const Vec3& eye, const Vec3& point, double below);
+
+}  // namespace relief::lod

@@ -1,0 +1,81 @@
+#pragma once
+// What level-of-detail selection and rendering need to know about the terrain
+// of a quad: its data tile, a conservative height range, and an upper bound
+// on the vertical distance between the quad's mesh and the finest data.
+//
+// Quads go deeper than the store: beyond its finest level they draw a part of
+// the finest tile with the same mesh, down to the level where every finest
+// sample is a vertex (max_level()). Absent tiles and nodata are height 0 (the
+// ellipsoid).
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <unordered_map>
+
+#include "relief/base/lru_cache.h"
+#include "relief/base/result.h"
+#include "relief/lod/mesh_topology.h"
+#include "relief/tiles/store.h"
+
+namespace relief::lod {
+
+// Where a quad's samples are in a data tile: interior sample coordinates
+// (x right, y down, 0 at the tile's west/north edge) of quad-space (u, v) are
+// (x0 + u * width, y0 + v * height).
+struct DataWindow {
+  std::optional<geo::TileKey> tile;  // nullopt: no data, height 0
+  double x0 = 0, y0 = 0, width = 0, height = 0;
+};
+
+struct HeightRange {
+  double lo = 0, hi = 0;
+};
+
+class TerrainModel {
+ public:
+  // `store` may be null (the bare ellipsoid). Decoded tiles are cached within
+  // `cache_bytes`.
+  TerrainModel(const tiles::Store* store, const MeshTopology& mesh, uint64_t cache_bytes);
+
+  const MeshTopology& mesh() const { return mesh_; }
+  int data_max_level() const { return data_max_; }
+  int max_level() const { return max_level_; }
+  int tile_width() const { return width_; }
+  int tile_height() const { return height_; }
+  int border() const { return border_; }
+
+  // The data tile and window of quad `key`; at or above the store's finest
+  // level the tile is the quad itself.
+  DataWindow window(const geo::TileKey& key) const;
+  // The window of the quad's parent data, for vertices on sides shared with a
+  // coarser quad: the parent's tile (or, beyond the store, the same tile).
+  DataWindow parent_window(const geo::TileKey& key) const;
+
+  // Decoded bordered tile with nodata as 0, or nullptr when the store has none.
+  using TilePtr = std::shared_ptr<const tiles::Raster>;
+  Result<TilePtr> tile(const geo::TileKey& key);
+
+  // Heights of the terrain in the quad (plus one sample around it).
+  Result<HeightRange> height_range(const geo::TileKey& key);
+  // Upper bound, in metres, of |mesh - finest data| over the quad, including
+  // the chord error of flat triangles on the curved ellipsoid.
+  Result<double> mesh_error(const geo::TileKey& key);
+
+  // Bilinear height at interior sample coordinates (x, y) of a bordered tile,
+  // exactly as the renderer's vertex shader computes it.
+  static float bilinear(const tiles::Raster& bordered, int border, double x, double y);
+
+ private:
+  Result<HeightRange> subtree_range(const geo::TileKey& key);
+  Result<double> exact_mesh_error(const geo::TileKey& key);
+
+  const tiles::Store* store_;
+  const MeshTopology& mesh_;
+  int data_max_ = 0, max_level_ = 0, width_ = 512, height_ = 256, border_ = 0;
+  LruCache<geo::TileKey, tiles::Raster, geo::TileKeyHash> tiles_;
+  std::mutex mutex_;
+  std::unordered_map<geo::TileKey, HeightRange, geo::TileKeyHash> ranges_, subtree_;
+  std::unordered_map<geo::TileKey, double, geo::TileKeyHash> errors_;
+};
+
+}  // namespace relief::lod

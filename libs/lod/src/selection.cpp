@@ -1,0 +1,278 @@
+#include "relief/lod/selection.h"
+
+#include <algorithm>
+#include <chrono>
+#include <deque>
+#include <functional>
+#include <unordered_map>
+
+#include <fmt/format.h>
+
+#include "relief/geo/ellipsoid.h"
+
+namespace relief::lod {
+
+namespace {
+
+using geo::TileKey;
+
+struct Box {
+  Vec3 lo, hi;
+};
+
+// An axis-aligned ECEF box around the quad's surface between its lowest and
+// highest heights: 5 x 5 points at both heights, padded by the bulge of the
+// ellipsoid between them.
+Box quad_box(const TileKey& key, const HeightRange& range) {
+  const geo::GeoBox b = key.bounds();
+  Box box{{INFINITY, INFINITY, INFINITY}, {-INFINITY, -INFINITY, -INFINITY}};
+  for (int j = 0; j <= 4; ++j) {
+    for (int i = 0; i <= 4; ++i) {
+      const double lon = b.west + b.width() * i / 4, lat = b.south + b.height() * j / 4;
+      for (double h : {range.lo, range.hi}) {
+        const Vec3 p = ecef(lon, lat, h);
+        box.lo = {std::min(box.lo.x, p.x), std::min(box.lo.y, p.y), std::min(box.lo.z, p.z)};
+        box.hi = {std::max(box.hi.x, p.x), std::max(box.hi.y, p.y), std::max(box.hi.z, p.z)};
+      }
+    }
+  }
+  const double step = std::max(b.width(), b.height()) / 4 * 3.14159265358979323846 / 180;
+  const double pad = geo::wgs84::kSemiMajorAxis * (1 - std::cos(std::min(step, 3.14159) / 2)) + 1;
+  box.lo = box.lo - Vec3{pad, pad, pad};
+  box.hi = box.hi + Vec3{pad, pad, pad};
+  return box;
+}
+
+double distance_to(const Box& b, const Vec3& p) {
+  const double dx = std::max({b.lo.x - p.x, 0.0, p.x - b.hi.x});
+  const double dy = std::max({b.lo.y - p.y, 0.0, p.y - b.hi.y});
+  const double dz = std::max({b.lo.z - p.z, 0.0, p.z - b.hi.z});
+  return std::sqrt(dx * dx + dy * dy + dz * dz);
+}
+
+bool outside_frustum(const Box& b, const View& v) {
+  for (const Plane& pl : v.planes) {
+    // The box corner furthest along the plane normal.
+    const Vec3 far{pl.normal.x >= 0 ? b.hi.x : b.lo.x, pl.normal.y >= 0 ? b.hi.y : b.lo.y,
+                   pl.normal.z >= 0 ? b.hi.z : b.lo.z};
+    if (dot(pl.normal, far) + pl.d < 0) return true;
+  }
+  return false;
+}
+
+class Selector {
+ public:
+  Selector(const View& v, TerrainModel& t, const SelectionOptions& o)
+      : view_(&v), terrain_(t), o_(o) {}
+  // Without a view: every quad visible, split by `rule` (restricted_quadtree).
+  Selector(TerrainModel& t, const SelectionOptions& o, std::function<bool(const TileKey&)> rule)
+      : view_(nullptr), terrain_(t), o_(o), rule_(std::move(rule)) {}
+
+  Status run() {
+    RELIEF_CHECK(visit(TileKey{0, 0, 0}));
+    RELIEF_CHECK(restrict_levels());
+    return {};
+  }
+
+  Selection result() {
+    Selection s;
+    for (const auto& [key, leaf] : leaves_) {
+      if (!leaf.visible) {
+        ++s.stats.culled;
+        continue;
+      }
+      SelectedQuad q;
+      q.key = key;
+      q.error_pixels = leaf.error_pixels;
+      classify_neighbours(q);
+      s.quads.push_back(q);
+    }
+    std::sort(s.quads.begin(), s.quads.end(),
+              [](const auto& a, const auto& b) { return a.key < b.key; });
+    s.stats.quads_per_level.assign(static_cast<size_t>(terrain_.max_level() + 1), 0);
+    for (const auto& q : s.quads) {
+      ++s.stats.quads_per_level[static_cast<size_t>(q.key.level)];
+      s.stats.triangles += terrain_.mesh().triangle_count(q.finer_sides);
+      s.stats.max_error_pixels = std::max(s.stats.max_error_pixels, q.error_pixels);
+    }
+    s.stats.quads = static_cast<uint32_t>(s.quads.size());
+    return s;
+  }
+
+ private:
+  struct Leaf {
+    bool visible = false;
+    double error_pixels = 0;
+  };
+
+  // Culls and measures one quad: visible, and its projected error bound.
+  Result<Leaf> assess(const TileKey& key) {
+    if (!view_) return Leaf{true, rule_(key) ? INFINITY : 0.0};
+    const View& view_ref = *view_;
+    const HeightRange range = RELIEF_TRY(terrain_.height_range(key));
+    const Box box = quad_box(key, range);
+    Leaf leaf;
+    if (outside_frustum(box, view_ref) || hidden_by_horizon(box, range)) return leaf;
+    leaf.visible = true;
+    if (o_.full_resolution) return leaf;
+    const double d = distance_to(box, view_ref.eye);
+    const double error = RELIEF_TRY(terrain_.mesh_error(key));
+    leaf.error_pixels = d > 0 ? error * view_ref.pixels_per_radian / d : INFINITY;
+    return leaf;
+  }
+
+  bool hidden_by_horizon(const Box& b, const HeightRange& range) const {
+    // Every corner of the box behind the ellipsoid shrunk below the lowest
+    // terrain (boxes of large quads are too loose to judge: never culled).
+    if (b.hi.x - b.lo.x > 2e6) return false;
+    const double below = std::max(0.0, -range.lo) + 100;
+    for (int c = 0; c < 8; ++c) {
+      const Vec3 p{c & 1 ? b.hi.x : b.lo.x, c & 2 ? b.hi.y : b.lo.y, c & 4 ? b.hi.z : b.lo.z};
+      if (!below_horizon(view_->eye, p, below)) return false;
+    }
+    return true;
+  }
+
+  Status visit(const TileKey& key) {
+    if (leaves_.size() > o_.max_quads) {
+      return fail(
+          fmt::format("level of detail: more than {} quads; raise --pixel-error", o_.max_quads));
+    }
+    const Leaf leaf = RELIEF_TRY(assess(key));
+    const bool split = leaf.visible && key.level < terrain_.max_level() &&
+                       (o_.full_resolution || leaf.error_pixels > o_.pixel_error);
+    if (!split) {
+      leaves_[key] = leaf;
+      return {};
+    }
+    for (int c = 0; c < 4; ++c) RELIEF_CHECK(visit(key.child(c & 1, c >> 1)));
+    return {};
+  }
+
+  // The leaf whose area contains quad `key` (key itself or an ancestor), if any.
+  const TileKey* leaf_containing(TileKey key) const {
+    for (;;) {
+      if (auto it = leaves_.find(key); it != leaves_.end()) return &it->first;
+      auto p = key.parent();
+      if (!p) return nullptr;
+      key = *p;
+    }
+  }
+
+  Status split(const TileKey& key, std::deque<TileKey>& work) {
+    leaves_.erase(key);
+    for (int c = 0; c < 4; ++c) {
+      const TileKey child = key.child(c & 1, c >> 1);
+      leaves_[child] = RELIEF_TRY(assess(child));
+      work.push_back(child);
+    }
+    return {};
+  }
+
+  // Splits leaves until quads sharing an edge or a corner differ by at most one level.
+  Status restrict_levels() {
+    std::deque<TileKey> work;
+    for (const auto& [key, leaf] : leaves_) work.push_back(key);
+    while (!work.empty()) {
+      const TileKey key = work.front();
+      work.pop_front();
+      if (!leaves_.count(key)) continue;
+      for (int dy = -1; dy <= 1; ++dy) {
+        for (int dx = -1; dx <= 1; ++dx) {
+          if (!dx && !dy) continue;
+          const auto n = key.neighbour(dx, dy);
+          if (!n) continue;
+          const TileKey* coarse = leaf_containing(*n);
+          if (coarse && coarse->level < key.level - 1) {
+            const TileKey victim = *coarse;
+            RELIEF_CHECK(split(victim, work));
+            work.push_back(key);
+            if (leaves_.size() > o_.max_quads) {
+              return fail(fmt::format("level of detail: more than {} quads; raise --pixel-error",
+                                      o_.max_quads));
+            }
+          }
+        }
+      }
+    }
+    return {};
+  }
+
+  // Level of the leaf at the neighbour position (dx, dy) of `key`: the same,
+  // one coarser, or one finer (the neighbour is subdivided); nullopt past a pole.
+  std::optional<int> neighbour_level(const TileKey& key, int dx, int dy) const {
+    const auto n = key.neighbour(dx, dy);
+    if (!n) return std::nullopt;
+    const TileKey* leaf = leaf_containing(*n);
+    if (!leaf) return key.level + 1;  // subdivided below the neighbour
+    return leaf->level;
+  }
+
+  void classify_neighbours(SelectedQuad& q) const {
+    const int l = q.key.level;
+    struct Dir {
+      int dx, dy;
+      uint8_t side;
+    };
+    for (const Dir& d :
+         {Dir{-1, 0, kWest}, Dir{1, 0, kEast}, Dir{0, -1, kNorth}, Dir{0, 1, kSouth}}) {
+      const auto n = neighbour_level(q.key, d.dx, d.dy);
+      if (!n) continue;
+      if (*n > l) q.finer_sides |= d.side;
+      if (*n < l) q.coarse_sides |= d.side;
+    }
+    struct CornerDir {
+      int dx, dy;
+      uint8_t corner;
+    };
+    for (const CornerDir& c : {CornerDir{-1, -1, kNorthWest}, CornerDir{1, -1, kNorthEast},
+                               CornerDir{-1, 1, kSouthWest}, CornerDir{1, 1, kSouthEast}}) {
+      for (const auto& [dx, dy] : {std::pair{c.dx, 0}, std::pair{0, c.dy}, std::pair{c.dx, c.dy}}) {
+        const auto n = neighbour_level(q.key, dx, dy);
+        if (n && *n < l) q.coarse_corners |= c.corner;
+      }
+    }
+  }
+
+  const View* view_;
+  TerrainModel& terrain_;
+  const SelectionOptions& o_;
+  std::function<bool(const TileKey&)> rule_;
+  std::unordered_map<TileKey, Leaf, geo::TileKeyHash> leaves_;
+};
+
+}  // namespace
+
+bool below_horizon(const Vec3& eye, const Vec3& point, double below) {
+  // Scale space so the shrunk ellipsoid is the unit sphere; the point is hidden
+  // when the segment from the eye to it passes through the sphere.
+  const double a = geo::wgs84::kSemiMajorAxis - below, b = geo::wgs84::kSemiMinorAxis - below;
+  const Vec3 e{eye.x / a, eye.y / a, eye.z / b}, p{point.x / a, point.y / a, point.z / b};
+  const Vec3 d = p - e;
+  const double dd = dot(d, d);
+  if (dd == 0) return false;
+  const double t = std::clamp(-dot(e, d) / dd, 0.0, 1.0);
+  const Vec3 closest = e + d * t;
+  return dot(closest, closest) < 1 && t > 0 && t < 1;
+}
+
+Result<Selection> restricted_quadtree(TerrainModel& terrain,
+                                      const std::function<bool(const geo::TileKey&)>& split) {
+  SelectionOptions o;
+  Selector s(terrain, o, split);
+  RELIEF_CHECK(s.run());
+  return s.result();
+}
+
+Result<Selection> select_quads(const View& view, TerrainModel& terrain,
+                               const SelectionOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  Selector s(view, terrain, options);
+  RELIEF_CHECK(s.run());
+  Selection result = s.result();
+  result.stats.seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return result;
+}
+
+}  // namespace relief::lod

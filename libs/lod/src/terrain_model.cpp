@@ -1,0 +1,261 @@
+#include "relief/lod/terrain_model.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "relief/geo/ellipsoid.h"
+
+namespace relief::lod {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+HeightRange unite(HeightRange a, HeightRange b) {
+  return {std::min(a.lo, b.lo), std::max(a.hi, b.hi)};
+}
+
+// Height at (a, b) in [0,1]^2 of a triangle with local vertices p[3] and heights h[3].
+double interpolate(double a, double b, const double (*p)[2], const double* h) {
+  const double d =
+      (p[1][0] - p[0][0]) * (p[2][1] - p[0][1]) - (p[2][0] - p[0][0]) * (p[1][1] - p[0][1]);
+  const double s = ((a - p[0][0]) * (p[2][1] - p[0][1]) - (p[2][0] - p[0][0]) * (b - p[0][1])) / d;
+  const double t = ((p[1][0] - p[0][0]) * (b - p[0][1]) - (a - p[0][0]) * (p[1][1] - p[0][1])) / d;
+  return h[0] * (1 - s - t) + h[1] * s + h[2] * t;
+}
+
+}  // namespace
+
+TerrainModel::TerrainModel(const tiles::Store* store, const MeshTopology& mesh,
+                           uint64_t cache_bytes)
+    : store_(store),
+      mesh_(mesh),
+      tiles_(cache_bytes, [](const tiles::Raster& r) { return r.byte_size(); }) {
+  if (store_) {
+    data_max_ = store_->manifest().max_level;
+    width_ = store_->grid().width();
+    height_ = store_->grid().height();
+    border_ = store_->grid().border();
+  }
+  const int k = static_cast<int>(std::log2(height_));
+  max_level_ = data_max_ + std::max(0, k - mesh_.refinement());
+}
+
+DataWindow TerrainModel::window(const geo::TileKey& key) const {
+  DataWindow w;
+  if (key.level <= data_max_) {
+    if (store_ && store_->has_tile(key)) w.tile = key;
+    w.width = width_;
+    w.height = height_;
+    return w;
+  }
+  const int m = key.level - data_max_;
+  const geo::TileKey a{data_max_, key.x >> m, key.y >> m};
+  if (store_ && store_->has_tile(a)) w.tile = a;
+  w.width = std::ldexp(width_, -m);
+  w.height = std::ldexp(height_, -m);
+  w.x0 = (key.x - (a.x << m)) * w.width;
+  w.y0 = (key.y - (a.y << m)) * w.height;
+  return w;
+}
+
+DataWindow TerrainModel::parent_window(const geo::TileKey& key) const {
+  if (key.level == 0 || key.level > data_max_) return window(key);
+  const geo::TileKey p = *key.parent();
+  DataWindow w;
+  if (store_ && store_->has_tile(p)) w.tile = p;
+  w.width = width_ / 2.0;
+  w.height = height_ / 2.0;
+  w.x0 = (key.x & 1) * w.width;
+  w.y0 = (key.y & 1) * w.height;
+  return w;
+}
+
+Result<TerrainModel::TilePtr> TerrainModel::tile(const geo::TileKey& key) {
+  if (!store_ || !store_->has_tile(key)) return TilePtr{};
+  if (auto hit = tiles_.get(key)) return hit;
+  tiles::Tile t = RELIEF_TRY(store_->read_tile(key));
+  if (t.raster.type() != tiles::SampleType::Float32) {
+    return fail(store_->root().string() + ": not an elevation store (imagery tiles)");
+  }
+  for (float& v : t.raster.f32()) {
+    if (std::isnan(v)) v = 0;
+  }
+  auto shared = std::make_shared<const tiles::Raster>(std::move(t.raster));
+  tiles_.put(key, shared);
+  return TilePtr(shared);
+}
+
+float TerrainModel::bilinear(const tiles::Raster& r, int border, double x, double y) {
+  const double tx = x - 0.5 + border, ty = y - 0.5 + border;
+  const double fx0 = std::floor(tx), fy0 = std::floor(ty);
+  const float fx = static_cast<float>(tx - fx0), fy = static_cast<float>(ty - fy0);
+  const int w = r.width(), h = r.height();
+  const int x0 = std::clamp(static_cast<int>(fx0), 0, w - 1), x1 = std::min(x0 + 1, w - 1);
+  const int y0 = std::clamp(static_cast<int>(fy0), 0, h - 1), y1 = std::min(y0 + 1, h - 1);
+  const auto v = r.f32();
+  auto at = [&](int xx, int yy) { return v[static_cast<size_t>(yy) * w + xx]; };
+  const float top = at(x0, y0) + (at(x1, y0) - at(x0, y0)) * fx;
+  const float bottom = at(x0, y1) + (at(x1, y1) - at(x0, y1)) * fx;
+  return top + (bottom - top) * fy;
+}
+
+Result<HeightRange> TerrainModel::subtree_range(const geo::TileKey& key) {
+  {
+    std::lock_guard lock(mutex_);
+    if (auto it = subtree_.find(key); it != subtree_.end()) return it->second;
+  }
+  HeightRange r{0, 0};
+  if (store_ && key.level <= data_max_) {
+    if (const tiles::IndexEntry* e = store_->index(key.level).find(key)) {
+      if (key.level == data_max_) {
+        r = {e->min, e->max};
+        if (e->valid_count < static_cast<uint32_t>(width_ * height_)) r = unite(r, {0, 0});
+      } else {
+        bool first = true;
+        for (int c = 0; c < 4; ++c) {
+          const HeightRange child = RELIEF_TRY(subtree_range(key.child(c & 1, c >> 1)));
+          r = first ? child : unite(r, child);
+          first = false;
+        }
+      }
+    }
+  }
+  std::lock_guard lock(mutex_);
+  subtree_[key] = r;
+  return r;
+}
+
+Result<HeightRange> TerrainModel::height_range(const geo::TileKey& key) {
+  if (key.level <= data_max_) return subtree_range(key);
+  {
+    std::lock_guard lock(mutex_);
+    if (auto it = ranges_.find(key); it != ranges_.end()) return it->second;
+  }
+  const DataWindow w = window(key);
+  HeightRange r{0, 0};
+  if (w.tile) {
+    const TilePtr t = RELIEF_TRY(tile(*w.tile));
+    const int x0 = static_cast<int>(w.x0) + border_ - 1, y0 = static_cast<int>(w.y0) + border_ - 1;
+    const int x1 = static_cast<int>(w.x0 + w.width) + border_ + 1;
+    const int y1 = static_cast<int>(w.y0 + w.height) + border_ + 1;
+    r = {INFINITY, -INFINITY};
+    const auto v = t->f32();
+    for (int y = std::max(0, y0); y < std::min(t->height(), y1); ++y) {
+      for (int x = std::max(0, x0); x < std::min(t->width(), x1); ++x) {
+        const float h = v[static_cast<size_t>(y) * t->width() + x];
+        r.lo = std::min<double>(r.lo, h);
+        r.hi = std::max<double>(r.hi, h);
+      }
+    }
+  }
+  std::lock_guard lock(mutex_);
+  ranges_[key] = r;
+  return r;
+}
+
+Result<double> TerrainModel::mesh_error(const geo::TileKey& key) {
+  {
+    std::lock_guard lock(mutex_);
+    if (auto it = errors_.find(key); it != errors_.end()) return it->second;
+  }
+  // Flat triangles under the curved ellipsoid: the sagitta of one square.
+  const double square = 2 * kPi / std::ldexp(1.0, key.level) / mesh_.squares_x();
+  double error = geo::wgs84::kSemiMajorAxis * square * square / 8;
+  if (key.level < data_max_) {
+    // The mesh and the finest data both lie within the heights of the quad and
+    // of its neighbours (edge vertices may take a neighbour's samples).
+    HeightRange r = RELIEF_TRY(subtree_range(key));
+    for (int dy = -1; dy <= 1; ++dy) {
+      for (int dx = -1; dx <= 1; ++dx) {
+        if (auto n = key.neighbour(dx, dy)) r = unite(r, RELIEF_TRY(subtree_range(*n)));
+      }
+    }
+    error += r.hi - r.lo;
+  } else {
+    error += RELIEF_TRY(exact_mesh_error(key));
+  }
+  std::lock_guard lock(mutex_);
+  errors_[key] = error;
+  return error;
+}
+
+// max |mesh - data| over the finest samples of the quad, for the plain and the
+// split border triangles; at the store's finest level also the largest change
+// of an edge vertex that takes the coarser parent data.
+Result<double> TerrainModel::exact_mesh_error(const geo::TileKey& key) {
+  const DataWindow w = window(key);
+  if (!w.tile) return 0.0;
+  const TilePtr t = RELIEF_TRY(tile(*w.tile));
+  const MeshTopology& m = mesh_;
+  const int nx = m.squares_x(), ny = m.squares_y();
+  std::vector<double> vh(m.vertices().size());
+  for (size_t i = 0; i < vh.size(); ++i) {
+    const MeshVertex& v = m.vertices()[i];
+    vh[i] = bilinear(*t, border_, w.x0 + v.u * w.width, w.y0 + v.v * w.height);
+  }
+  double worst = 0;
+  const int i0 = static_cast<int>(w.x0), j0 = static_cast<int>(w.y0);
+  const int iw = static_cast<int>(w.width), jh = static_cast<int>(w.height);
+  const auto data = t->f32();
+  static constexpr double kC[2] = {0.5, 0.5};
+  for (int j = j0; j < j0 + jh; ++j) {
+    for (int i = i0; i < i0 + iw; ++i) {
+      const double value = data[static_cast<size_t>(j + border_) * t->width() + i + border_];
+      const double u = (i + 0.5 - w.x0) / w.width * nx, v = (j + 0.5 - w.y0) / w.height * ny;
+      const int si = std::min(nx - 1, static_cast<int>(u)),
+                sj = std::min(ny - 1, static_cast<int>(v));
+      const double a = u - si, b = v - sj;
+      const double hc = vh[m.centre_vertex(si, sj)];
+      const double hnw = vh[m.corner_vertex(si, sj)], hne = vh[m.corner_vertex(si + 1, sj)];
+      const double hsw = vh[m.corner_vertex(si, sj + 1)], hse = vh[m.corner_vertex(si + 1, sj + 1)];
+      // The triangle of the square containing (a, b), and its side if on the border.
+      double p[3][2], h[3];
+      int side = 0, k = 0;
+      double mid[2];
+      if (b <= a && b <= 1 - a) {
+        p[0][0] = 0, p[0][1] = 0, p[1][0] = 1, p[1][1] = 0, h[0] = hnw, h[1] = hne;
+        side = sj == 0 ? kNorth : 0, k = si, mid[0] = 0.5, mid[1] = 0;
+      } else if (a >= b && a >= 1 - b) {
+        p[0][0] = 1, p[0][1] = 0, p[1][0] = 1, p[1][1] = 1, h[0] = hne, h[1] = hse;
+        side = si == nx - 1 ? kEast : 0, k = sj, mid[0] = 1, mid[1] = 0.5;
+      } else if (b >= a && b >= 1 - a) {
+        p[0][0] = 1, p[0][1] = 1, p[1][0] = 0, p[1][1] = 1, h[0] = hse, h[1] = hsw;
+        side = sj == ny - 1 ? kSouth : 0, k = si, mid[0] = 0.5, mid[1] = 1;
+      } else {
+        p[0][0] = 0, p[0][1] = 1, p[1][0] = 0, p[1][1] = 0, h[0] = hsw, h[1] = hnw;
+        side = si == 0 ? kWest : 0, k = sj, mid[0] = 0, mid[1] = 0.5;
+      }
+      p[2][0] = kC[0], p[2][1] = kC[1], h[2] = hc;
+      worst = std::max(worst, std::abs(interpolate(a, b, p, h) - value));
+      if (side) {  // the split variant: two triangles through the side's midpoint
+        const double hm = vh[m.side_midpoint(side, k)];
+        double q[3][2] = {{p[0][0], p[0][1]}, {mid[0], mid[1]}, {kC[0], kC[1]}};
+        double hq[3] = {h[0], hm, hc};
+        const bool first_half = (a - p[0][0]) * (a - p[0][0]) + (b - p[0][1]) * (b - p[0][1]) <=
+                                (a - p[1][0]) * (a - p[1][0]) + (b - p[1][1]) * (b - p[1][1]);
+        if (!first_half) {
+          q[0][0] = mid[0], q[0][1] = mid[1], q[1][0] = p[1][0], q[1][1] = p[1][1];
+          hq[0] = hm, hq[1] = h[1];
+        }
+        worst = std::max(worst, std::abs(interpolate(a, b, q, hq) - value));
+      }
+    }
+  }
+  if (key.level == data_max_ && key.level > 0) {
+    const DataWindow pw = parent_window(key);
+    const TilePtr pt = pw.tile ? RELIEF_TRY(tile(*pw.tile)) : TilePtr{};
+    double edge = 0;
+    for (size_t i = 0; i < vh.size(); ++i) {
+      const MeshVertex& v = m.vertices()[i];
+      if (!v.sides) continue;
+      const double hp =
+          pt ? bilinear(*pt, border_, pw.x0 + v.u * pw.width, pw.y0 + v.v * pw.height) : 0.0;
+      edge = std::max(edge, std::abs(hp - vh[i]));
+    }
+    worst += edge;
+  }
+  return worst;
+}
+
+}  // namespace relief::lod

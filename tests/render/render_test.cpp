@@ -1,0 +1,190 @@
+// `relief render`, headless through EGL on Mesa's llvmpipe: no cracks on steep
+// terrain from many oblique viewpoints, golden images of fixed views of the
+// real SRTM data with and without imagery, and bad input.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "relief/base/file_io.h"
+#include "relief/tiles/codec.h"
+#include "test_support.h"
+
+namespace relief::testing {
+namespace {
+namespace fs = std::filesystem;
+
+struct Image {
+  int width = 0, height = 0;
+  std::vector<uint8_t> rgba;
+};
+
+Image read_png(const fs::path& path, int width, int height) {
+  auto bytes = read_file(path);
+  if (!bytes) {
+    ADD_FAILURE() << path << ": " << bytes.error().message;
+    return {width, height, std::vector<uint8_t>(static_cast<size_t>(width) * height * 4)};
+  }
+  auto raster =
+      tiles::decode(tiles::Codec::Png, *bytes, tiles::SampleType::UInt8, 4, width, height);
+  if (!raster) {
+    ADD_FAILURE() << path << ": " << raster.error().message;
+    return {width, height, std::vector<uint8_t>(static_cast<size_t>(width) * height * 4)};
+  }
+  Image img{width, height, {}};
+  img.rgba.assign(raster->u8().begin(), raster->u8().end());
+  return img;
+}
+
+// Stores built once for all tests of this binary.
+class Stores : public ::testing::Environment {
+ public:
+  static fs::path pyrenees() { return dir() / "pyrenees"; }
+  static fs::path world() { return dir() / "world"; }
+  static fs::path sar() { return dir() / "sar"; }
+  void SetUp() override {
+    ASSERT_EQ(run_relief({"build", data("srtm/N41E001.hgt.zip"), data("srtm/N42E001.hgt.zip"),
+                          "--kind", "elevation", "-o", pyrenees().string(), "-q"})
+                  .exit_code,
+              0);
+    ASSERT_EQ(run_relief({"build", data("imagery/world.rgb.tif"), "--kind", "imagery", "-o",
+                          world().string(), "-q"})
+                  .exit_code,
+              0);
+  }
+
+ private:
+  static fs::path dir() {
+    static ScratchDir d("render_stores");
+    return d.path();
+  }
+};
+const auto* const kStores = ::testing::AddGlobalTestEnvironment(new Stores);
+
+Image render(const std::vector<std::string>& extra, int w, int h, const fs::path& out) {
+  std::vector<std::string> args = {"render", Stores::pyrenees().string(),
+                                   "--size", std::to_string(w) + "x" + std::to_string(h),
+                                   "-o",     out.string()};
+  args.insert(args.end(), extra.begin(), extra.end());
+  auto r = run_relief(args);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  return read_png(out, w, h);
+}
+
+TEST(Render, NoCracksFromObliqueViewsOfSteepTerrain) {
+  ScratchDir dir("render_cracks");
+  // Views that see only ground (pitch below -fov/2): any sky pixel is a crack.
+  const double views[][5] = {{1.45, 42.55, 3600, 20, -50},  {1.62, 42.62, 4200, 135, -40},
+                             {1.30, 42.45, 3800, 250, -65}, {1.75, 42.50, 3500, 310, -38},
+                             {1.55, 42.70, 5000, 90, -55},  {1.20, 42.60, 4000, 180, -45}};
+  int n = 0;
+  for (const auto& v : views) {
+    SCOPED_TRACE(n);
+    const std::string camera = fmt::format("{},{},{},{},{},0", v[0], v[1], v[2], v[3], v[4]);
+    const fs::path out = dir / ("crack" + std::to_string(n++) + ".png");
+    const Image img =
+        render({"--camera", camera, "--sky", "255,0,255", "--pixel-error", "1.5"}, 240, 180, out);
+    size_t sky = 0;
+    for (size_t p = 0; p < img.rgba.size(); p += 4) {
+      sky += img.rgba[p] == 255 && img.rgba[p + 1] == 0 && img.rgba[p + 2] == 255;
+    }
+    EXPECT_EQ(sky, 0u) << out;
+  }
+}
+
+// Compares with tests/render/golden/NAME.png; on failure writes the frame and
+// a difference image next to it in the scratch directory.
+void expect_golden(const std::string& name, const std::vector<std::string>& args, int w, int h) {
+  ScratchDir dir("render_golden_" + name);
+  const Image got = render(args, w, h, dir / (name + ".png"));
+  const fs::path golden = fs::path(RELIEF_SOURCE_DIR) / "tests/render/golden" / (name + ".png");
+  if (std::getenv("RELIEF_UPDATE_GOLDEN")) {
+    fs::copy_file(dir / (name + ".png"), golden, fs::copy_options::overwrite_existing);
+    return;
+  }
+  const Image want = read_png(golden, w, h);
+  size_t far = 0;
+  double total = 0;
+  tiles::Raster diff(tiles::SampleType::UInt8, 4, w, h);
+  for (size_t p = 0; p < got.rgba.size(); p += 4) {
+    int worst = 0;
+    for (int c = 0; c < 3; ++c)
+      worst = std::max(worst, std::abs(got.rgba[p + c] - want.rgba[p + c]));
+    total += worst;
+    far += worst > 24;
+    diff.u8()[p] = diff.u8()[p + 1] = diff.u8()[p + 2] =
+        static_cast<uint8_t>(std::min(255, worst * 8));
+    diff.u8()[p + 3] = 255;
+  }
+  const double mean = total / (w * h);
+  if (mean > 1.5 || far > static_cast<size_t>(w * h / 200)) {
+    auto png = tiles::encode(diff, tiles::CodecOptions{tiles::Codec::Png});
+    const fs::path keep = fs::temp_directory_path() / ("relief-" + name + "-diff.png");
+    (void)write_file_atomic(keep, *png);
+    fs::copy_file(dir / (name + ".png"), fs::temp_directory_path() / ("relief-" + name + ".png"),
+                  fs::copy_options::overwrite_existing);
+    ADD_FAILURE() << name << ": mean difference " << mean << ", " << far
+                  << " pixels differ by more than 24; see " << keep;
+  }
+}
+
+TEST(Render, GoldenImages) {
+  expect_golden("pyrenees_oblique", {"--look-at", "1.5,42.5,1500,40000,0,-30"}, 160, 120);
+  expect_golden("pyrenees_imagery",
+                {"--look-at", "1.4,42.6,1500,25000,60,-40", "--imagery", Stores::world().string()},
+                160, 120);
+  expect_golden("globe_imagery",
+                {"--camera", "1.5,20,8000000,0,-90,0", "--imagery", Stores::world().string()}, 160,
+                120);
+}
+
+TEST(Render, StatisticsDescribeTheFrame) {
+  ScratchDir dir("render_stats");
+  const fs::path stats = dir / "s.json";
+  render({"--look-at", "1.5,42.5,1500,40000,0,-30", "--stats", stats.string()}, 200, 150,
+         dir / "f.png");
+  std::ifstream in(stats);
+  const auto j = nlohmann::json::parse(in);
+  EXPECT_GT(j["quads"].get<int>(), 10);
+  EXPECT_EQ(j["draw_calls"], j["quads"]);
+  EXPECT_GT(j["triangles"].get<int64_t>(), 0);
+  EXPECT_LE(j["max_error_pixels"].get<double>(), 1.0);
+  int sum = 0;
+  for (const auto& [level, n] : j["quads_per_level"].items()) sum += n.get<int>();
+  EXPECT_EQ(sum, j["quads"].get<int>());
+}
+
+TEST(Render, BadInputIsAOneLineError) {
+  ScratchDir dir("render_bad");
+  const std::string out = (dir / "f.png").string(), store = Stores::pyrenees().string();
+  ASSERT_EQ(run_relief({"build", data("sar/umbra_mount_yasur.tif"), "--kind", "sar", "-o",
+                        (dir / "sar").string(), "-q"})
+                .exit_code,
+            0);
+  auto expect_error = [&](std::vector<std::string> args, const std::string& needle) {
+    auto r = run_relief(args);
+    EXPECT_TRUE(is_one_line_error(r, needle)) << needle << ": " << r.err;
+    EXPECT_FALSE(fs::exists(out));
+  };
+  const std::string cam = "1.5,42.5,5000,0,-30,0";
+  expect_error({"render", store, "--camera", "1.5,42.5,-5000,0,-30,0", "-o", out},
+               "inside the ellipsoid");
+  expect_error({"render", store, "--camera", "1.5,42.5,300,0,-30,0", "-o", out},
+               "below the ground");
+  expect_error({"render", (dir / "missing").string(), "--camera", cam, "-o", out}, "missing");
+  expect_error({"render", (dir / "sar").string(), "--camera", cam, "-o", out}, "holds sar data");
+  expect_error({"render", store, "--imagery", store, "--camera", cam, "-o", out},
+               "--imagery must be an imagery store");
+  expect_error({"render", store, "--camera", cam, "--size", "0x0", "-o", out}, "--size");
+  expect_error({"render", store, "--camera", cam, "--size", "100000x10", "-o", out}, "--size");
+  expect_error({"render", store, "--camera", "1,2,3", "-o", out}, "6 comma-separated");
+  expect_error({"render", store, "-o", out}, "--camera");
+  expect_error({"render", store, "--camera", cam, "--pixel-error", "0", "-o", out},
+               "--pixel-error");
+}
+
+}  // namespace
+}  // namespace relief::testing
