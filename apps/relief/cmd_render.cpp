@@ -146,7 +146,10 @@ int run_render(const std::vector<std::string>& argv) {
                                     camera.height, **ground, camera.lon, camera.lat));
   }
 
-  const lod::MeshTopology mesh(mesh_level->value_or(4));
+  // The brute-force reference: one vertex per finest sample, no deeper quads.
+  const int full_level = static_cast<int>(std::log2(store->grid().height()));
+  const lod::MeshTopology mesh(args->has("--full-resolution") ? full_level
+                                                              : mesh_level->value_or(4));
   lod::TerrainModel terrain(&*store, mesh, uint64_t{512} << 20);
   lod::SelectionOptions so;
   so.pixel_error = pixel_error;

@@ -4,7 +4,9 @@
 #include <chrono>
 #include <deque>
 #include <functional>
-#include <unordered_map>
+#include <optional>
+
+#include "quad_map.h"
 
 #include <fmt/format.h>
 
@@ -15,33 +17,6 @@ namespace relief::lod {
 namespace {
 
 using geo::TileKey;
-
-struct Box {
-  Vec3 lo, hi;
-};
-
-// An axis-aligned ECEF box around the quad's surface between its lowest and
-// highest heights: 5 x 5 points at both heights, padded by the bulge of the
-// ellipsoid between them.
-Box quad_box(const TileKey& key, const HeightRange& range) {
-  const geo::GeoBox b = key.bounds();
-  Box box{{INFINITY, INFINITY, INFINITY}, {-INFINITY, -INFINITY, -INFINITY}};
-  for (int j = 0; j <= 4; ++j) {
-    for (int i = 0; i <= 4; ++i) {
-      const double lon = b.west + b.width() * i / 4, lat = b.south + b.height() * j / 4;
-      for (double h : {range.lo, range.hi}) {
-        const Vec3 p = ecef(lon, lat, h);
-        box.lo = {std::min(box.lo.x, p.x), std::min(box.lo.y, p.y), std::min(box.lo.z, p.z)};
-        box.hi = {std::max(box.hi.x, p.x), std::max(box.hi.y, p.y), std::max(box.hi.z, p.z)};
-      }
-    }
-  }
-  const double step = std::max(b.width(), b.height()) / 4 * 3.14159265358979323846 / 180;
-  const double pad = geo::wgs84::kSemiMajorAxis * (1 - std::cos(std::min(step, 3.14159) / 2)) + 1;
-  box.lo = box.lo - Vec3{pad, pad, pad};
-  box.hi = box.hi + Vec3{pad, pad, pad};
-  return box;
-}
 
 double distance_to(const Box& b, const Vec3& p) {
   const double dx = std::max({b.lo.x - p.x, 0.0, p.x - b.hi.x});
@@ -76,17 +51,17 @@ class Selector {
 
   Selection result() {
     Selection s;
-    for (const auto& [key, leaf] : leaves_) {
+    leaves_.for_each([&](const TileKey& key, const Leaf& leaf) {
       if (!leaf.visible) {
         ++s.stats.culled;
-        continue;
+        return;
       }
       SelectedQuad q;
       q.key = key;
       q.error_pixels = leaf.error_pixels;
       classify_neighbours(q);
       s.quads.push_back(q);
-    }
+    });
     std::sort(s.quads.begin(), s.quads.end(),
               [](const auto& a, const auto& b) { return a.key < b.key; });
     s.stats.quads_per_level.assign(static_cast<size_t>(terrain_.max_level() + 1), 0);
@@ -109,14 +84,20 @@ class Selector {
   Result<Leaf> assess(const TileKey& key) {
     if (!view_) return Leaf{true, rule_(key) ? INFINITY : 0.0};
     const View& view_ref = *view_;
-    const HeightRange range = RELIEF_TRY(terrain_.height_range(key));
-    const Box box = quad_box(key, range);
+    TerrainModel::QuadInfo* info = RELIEF_TRY(terrain_.quad(key));
+    const HeightRange& range = info->range;
+    const Box& box = info->box;
     Leaf leaf;
     if (outside_frustum(box, view_ref) || hidden_by_horizon(box, range)) return leaf;
     leaf.visible = true;
-    if (o_.full_resolution) return leaf;
+    // Brute force: the dataset alone, every quad down to the finest level.
+    if (o_.full_resolution) {
+      leaf.visible = terrain_.window(key).tile.has_value();
+      leaf.error_pixels = key.level < terrain_.max_level() ? INFINITY : 0.0;
+      return leaf;
+    }
     const double d = distance_to(box, view_ref.eye);
-    const double error = RELIEF_TRY(terrain_.mesh_error(key));
+    const double error = RELIEF_TRY(terrain_.quad_error(key, *info));
     leaf.error_pixels = d > 0 ? error * view_ref.pixels_per_radian / d : INFINITY;
     return leaf;
   }
@@ -139,10 +120,10 @@ class Selector {
           fmt::format("level of detail: more than {} quads; raise --pixel-error", o_.max_quads));
     }
     const Leaf leaf = RELIEF_TRY(assess(key));
-    const bool split = leaf.visible && key.level < terrain_.max_level() &&
-                       (o_.full_resolution || leaf.error_pixels > o_.pixel_error);
+    const bool split =
+        leaf.visible && key.level < terrain_.max_level() && leaf.error_pixels > o_.pixel_error;
     if (!split) {
-      leaves_[key] = leaf;
+      leaves_.set(key, leaf);
       return {};
     }
     for (int c = 0; c < 4; ++c) RELIEF_CHECK(visit(key.child(c & 1, c >> 1)));
@@ -150,12 +131,11 @@ class Selector {
   }
 
   // The leaf whose area contains quad `key` (key itself or an ancestor), if any.
-  const TileKey* leaf_containing(TileKey key) const {
+  std::optional<TileKey> leaf_containing(TileKey key) {
     for (;;) {
-      if (auto it = leaves_.find(key); it != leaves_.end()) return &it->first;
-      auto p = key.parent();
-      if (!p) return nullptr;
-      key = *p;
+      if (leaves_.contains(key)) return key;
+      if (key.level == 0) return std::nullopt;
+      key = {key.level - 1, key.x >> 1, key.y >> 1};
     }
   }
 
@@ -163,7 +143,7 @@ class Selector {
     leaves_.erase(key);
     for (int c = 0; c < 4; ++c) {
       const TileKey child = key.child(c & 1, c >> 1);
-      leaves_[child] = RELIEF_TRY(assess(child));
+      leaves_.set(child, RELIEF_TRY(assess(child)));
       work.push_back(child);
     }
     return {};
@@ -172,17 +152,17 @@ class Selector {
   // Splits leaves until quads sharing an edge or a corner differ by at most one level.
   Status restrict_levels() {
     std::deque<TileKey> work;
-    for (const auto& [key, leaf] : leaves_) work.push_back(key);
+    leaves_.for_each([&](const TileKey& key, const Leaf&) { work.push_back(key); });
     while (!work.empty()) {
       const TileKey key = work.front();
       work.pop_front();
-      if (!leaves_.count(key)) continue;
+      if (!leaves_.contains(key)) continue;
       for (int dy = -1; dy <= 1; ++dy) {
         for (int dx = -1; dx <= 1; ++dx) {
           if (!dx && !dy) continue;
           const auto n = key.neighbour(dx, dy);
           if (!n) continue;
-          const TileKey* coarse = leaf_containing(*n);
+          const std::optional<TileKey> coarse = leaf_containing(*n);
           if (coarse && coarse->level < key.level - 1) {
             const TileKey victim = *coarse;
             RELIEF_CHECK(split(victim, work));
@@ -200,15 +180,15 @@ class Selector {
 
   // Level of the leaf at the neighbour position (dx, dy) of `key`: the same,
   // one coarser, or one finer (the neighbour is subdivided); nullopt past a pole.
-  std::optional<int> neighbour_level(const TileKey& key, int dx, int dy) const {
+  std::optional<int> neighbour_level(const TileKey& key, int dx, int dy) {
     const auto n = key.neighbour(dx, dy);
     if (!n) return std::nullopt;
-    const TileKey* leaf = leaf_containing(*n);
+    const std::optional<TileKey> leaf = leaf_containing(*n);
     if (!leaf) return key.level + 1;  // subdivided below the neighbour
     return leaf->level;
   }
 
-  void classify_neighbours(SelectedQuad& q) const {
+  void classify_neighbours(SelectedQuad& q) {
     const int l = q.key.level;
     struct Dir {
       int dx, dy;
@@ -238,7 +218,7 @@ class Selector {
   TerrainModel& terrain_;
   const SelectionOptions& o_;
   std::function<bool(const TileKey&)> rule_;
-  std::unordered_map<TileKey, Leaf, geo::TileKeyHash> leaves_;
+  QuadMap<Leaf> leaves_;
 };
 
 }  // namespace

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "relief/geo/ellipsoid.h"
+#include "relief/lod/camera.h"
 
 namespace relief::lod {
 
@@ -22,6 +23,29 @@ double interpolate(double a, double b, const double (*p)[2], const double* h) {
   const double s = ((a - p[0][0]) * (p[2][1] - p[0][1]) - (p[2][0] - p[0][0]) * (b - p[0][1])) / d;
   const double t = ((p[1][0] - p[0][0]) * (b - p[0][1]) - (a - p[0][0]) * (p[1][1] - p[0][1])) / d;
   return h[0] * (1 - s - t) + h[1] * s + h[2] * t;
+}
+
+// An axis-aligned ECEF box around the quad's surface between its lowest and
+// highest heights: 5 x 5 points at both heights, padded by the bulge of the
+// ellipsoid between them.
+Box quad_box(const geo::TileKey& key, const HeightRange& range) {
+  const geo::GeoBox b = key.bounds();
+  Box box{{INFINITY, INFINITY, INFINITY}, {-INFINITY, -INFINITY, -INFINITY}};
+  for (int j = 0; j <= 4; ++j) {
+    for (int i = 0; i <= 4; ++i) {
+      const double lon = b.west + b.width() * i / 4, lat = b.south + b.height() * j / 4;
+      for (double h : {range.lo, range.hi}) {
+        const Vec3 p = ecef(lon, lat, h);
+        box.lo = {std::min(box.lo.x, p.x), std::min(box.lo.y, p.y), std::min(box.lo.z, p.z)};
+        box.hi = {std::max(box.hi.x, p.x), std::max(box.hi.y, p.y), std::max(box.hi.z, p.z)};
+      }
+    }
+  }
+  const double step = std::max(b.width(), b.height()) / 4 * 3.14159265358979323846 / 180;
+  const double pad = geo::wgs84::kSemiMajorAxis * (1 - std::cos(std::min(step, 3.14159) / 2)) + 1;
+  box.lo = box.lo - Vec3{pad, pad, pad};
+  box.hi = box.hi + Vec3{pad, pad, pad};
+  return box;
 }
 
 }  // namespace
@@ -101,10 +125,7 @@ float TerrainModel::bilinear(const tiles::Raster& r, int border, double x, doubl
 }
 
 Result<HeightRange> TerrainModel::subtree_range(const geo::TileKey& key) {
-  {
-    std::lock_guard lock(mutex_);
-    if (auto it = subtree_.find(key); it != subtree_.end()) return it->second;
-  }
+  if (auto it = subtree_.find(key); it != subtree_.end()) return it->second;
   HeightRange r{0, 0};
   if (store_ && key.level <= data_max_) {
     if (const tiles::IndexEntry* e = store_->index(key.level).find(key)) {
@@ -121,17 +142,13 @@ Result<HeightRange> TerrainModel::subtree_range(const geo::TileKey& key) {
       }
     }
   }
-  std::lock_guard lock(mutex_);
   subtree_[key] = r;
   return r;
 }
 
 Result<HeightRange> TerrainModel::height_range(const geo::TileKey& key) {
   if (key.level <= data_max_) return subtree_range(key);
-  {
-    std::lock_guard lock(mutex_);
-    if (auto it = ranges_.find(key); it != ranges_.end()) return it->second;
-  }
+  if (auto it = ranges_.find(key); it != ranges_.end()) return it->second;
   const DataWindow w = window(key);
   HeightRange r{0, 0};
   if (w.tile) {
@@ -149,16 +166,30 @@ Result<HeightRange> TerrainModel::height_range(const geo::TileKey& key) {
       }
     }
   }
-  std::lock_guard lock(mutex_);
   ranges_[key] = r;
   return r;
 }
 
+Result<Box> TerrainModel::bounds(const geo::TileKey& key) {
+  if (auto it = boxes_.find(key); it != boxes_.end()) return it->second;
+  const Box box = quad_box(key, RELIEF_TRY(height_range(key)));
+  boxes_[key] = box;
+  return box;
+}
+
+Result<TerrainModel::QuadInfo*> TerrainModel::quad(const geo::TileKey& key) {
+  if (auto it = quads_.find(key); it != quads_.end()) return &it->second;
+  QuadInfo info{RELIEF_TRY(height_range(key)), RELIEF_TRY(bounds(key))};
+  return &quads_.emplace(key, info).first->second;
+}
+
+Result<double> TerrainModel::quad_error(const geo::TileKey& key, QuadInfo& info) {
+  if (info.error < 0) info.error = RELIEF_TRY(mesh_error(key));
+  return info.error;
+}
+
 Result<double> TerrainModel::mesh_error(const geo::TileKey& key) {
-  {
-    std::lock_guard lock(mutex_);
-    if (auto it = errors_.find(key); it != errors_.end()) return it->second;
-  }
+  if (auto it = errors_.find(key); it != errors_.end()) return it->second;
   // Flat triangles under the curved ellipsoid: the sagitta of one square.
   const double square = 2 * kPi / std::ldexp(1.0, key.level) / mesh_.squares_x();
   double error = geo::wgs84::kSemiMajorAxis * square * square / 8;
@@ -175,7 +206,6 @@ Result<double> TerrainModel::mesh_error(const geo::TileKey& key) {
   } else {
     error += RELIEF_TRY(exact_mesh_error(key));
   }
-  std::lock_guard lock(mutex_);
   errors_[key] = error;
   return error;
 }

@@ -113,24 +113,10 @@ class GlTerrainRenderer final : public TerrainRenderer {
     FrameStats stats;
     const lod::MeshTopology& mesh = elevation_.mesh();
     const size_t per_quad = mesh.vertices().size();
-    // Vertices relative to the eye: double until after the subtraction.
-    std::vector<Vertex> vertices(per_quad * selection.quads.size());
-    for (size_t q = 0; q < selection.quads.size(); ++q) {
-      const geo::GeoBox b = selection.quads[q].key.bounds();
-      for (size_t i = 0; i < per_quad; ++i) {
-        const lod::MeshVertex& mv = mesh.vertices()[i];
-        const double lon = b.west + mv.u * b.width(), lat = b.north - mv.v * b.height();
-        const lod::Vec3 p = lod::ecef(lon, lat, 0) - view.eye, up = lod::up_at(lon, lat);
-        Vertex& v = vertices[q * per_quad + i];
-        v.rel[0] = static_cast<float>(p.x), v.rel[1] = static_cast<float>(p.y),
-        v.rel[2] = static_cast<float>(p.z);
-        v.up[0] = static_cast<float>(up.x), v.up[1] = static_cast<float>(up.y),
-        v.up[2] = static_cast<float>(up.z);
-        v.uv[0] = mv.u, v.uv[1] = mv.v;
-        v.flags = static_cast<uint32_t>(mv.sides) | static_cast<uint32_t>(mv.corner) << 4;
-      }
-    }
-    const size_t bytes = std::max<size_t>(1, vertices.size()) * sizeof(Vertex);
+    // Vertices go to the GPU in batches of whole quads, at most kBatchVertices
+    // at a time, so a frame of any size fits in bounded memory.
+    const size_t batch_quads = std::max<size_t>(1, kBatchVertices / per_quad);
+    const size_t bytes = std::min(selection.quads.size(), batch_quads) * per_quad * sizeof(Vertex);
     if (bytes > vertex_capacity_) {
       glDeleteBuffers(1, &vertex_buffer_);
       glCreateBuffers(1, &vertex_buffer_);
@@ -138,11 +124,6 @@ class GlTerrainRenderer final : public TerrainRenderer {
                            GL_DYNAMIC_STORAGE_BIT);
       glVertexArrayVertexBuffer(vao_, 0, vertex_buffer_, 0, sizeof(Vertex));
       vertex_capacity_ = bytes;
-    }
-    if (!vertices.empty()) {
-      glNamedBufferSubData(vertex_buffer_, 0,
-                           static_cast<GLsizeiptr>(vertices.size() * sizeof(Vertex)),
-                           vertices.data());
     }
     // Textures of every quad before the first draw call (a complete frame).
     struct QuadTextures {
@@ -184,7 +165,13 @@ class GlTerrainRenderer final : public TerrainRenderer {
     glUniform1i(location("border"), elevation_.border());
     glUniform1i(location("imagery_border"), imagery_ ? imagery_->manifest().border : 0);
     glUniform1f(location("exaggeration"), o.exaggeration);
+    double fill_seconds = 0;
     for (size_t q = 0; q < selection.quads.size(); ++q) {
+      if (q % batch_quads == 0) {
+        const auto fill_start = Clock::now();
+        upload_vertices(view, selection, q, std::min(selection.quads.size(), q + batch_quads));
+        fill_seconds += std::chrono::duration<double>(Clock::now() - fill_start).count();
+      }
       const lod::SelectedQuad& quad = selection.quads[q];
       const QuadTextures& t = textures[q];
       const geo::GeoBox b = quad.key.bounds();
@@ -212,17 +199,48 @@ class GlTerrainRenderer final : public TerrainRenderer {
           GL_TRIANGLES, static_cast<GLsizei>(mesh.index_count(quad.finer_sides)), GL_UNSIGNED_INT,
           reinterpret_cast<const void*>(static_cast<uintptr_t>(mesh.first_index(quad.finer_sides)) *
                                         sizeof(uint32_t)),
-          static_cast<GLint>(q * per_quad));
+          static_cast<GLint>((q % batch_quads) * per_quad));
       ++stats.draw_calls;
       stats.triangles += mesh.triangle_count(quad.finer_sides);
     }
     glFinish();
-    stats.gpu_seconds = std::chrono::duration<double>(Clock::now() - gpu_start).count();
+    stats.gpu_seconds =
+        std::chrono::duration<double>(Clock::now() - gpu_start).count() - fill_seconds;
+    stats.prepare_seconds += fill_seconds;
     if (auto e = gl_error(); !e.empty()) return fail("drawing: " + e);
     return stats;
   }
 
  private:
+  static constexpr size_t kBatchVertices = size_t{1} << 21;  // 64 MiB of vertices
+
+  // Vertices of quads [first, last) relative to the eye: double until after
+  // the subtraction, then float.
+  void upload_vertices(const lod::View& view, const lod::Selection& selection, size_t first,
+                       size_t last) {
+    const lod::MeshTopology& mesh = elevation_.mesh();
+    const size_t per_quad = mesh.vertices().size();
+    staging_.resize(per_quad * (last - first));
+    for (size_t q = first; q < last; ++q) {
+      const geo::GeoBox b = selection.quads[q].key.bounds();
+      for (size_t i = 0; i < per_quad; ++i) {
+        const lod::MeshVertex& mv = mesh.vertices()[i];
+        const double lon = b.west + mv.u * b.width(), lat = b.north - mv.v * b.height();
+        const lod::Vec3 p = lod::ecef(lon, lat, 0) - view.eye, up = lod::up_at(lon, lat);
+        Vertex& v = staging_[(q - first) * per_quad + i];
+        v.rel[0] = static_cast<float>(p.x), v.rel[1] = static_cast<float>(p.y),
+        v.rel[2] = static_cast<float>(p.z);
+        v.up[0] = static_cast<float>(up.x), v.up[1] = static_cast<float>(up.y),
+        v.up[2] = static_cast<float>(up.z);
+        v.uv[0] = mv.u, v.uv[1] = mv.v;
+        v.flags = static_cast<uint32_t>(mv.sides) | static_cast<uint32_t>(mv.corner) << 4;
+      }
+    }
+    glNamedBufferSubData(vertex_buffer_, 0,
+                         static_cast<GLsizeiptr>(staging_.size() * sizeof(Vertex)),
+                         staging_.data());
+  }
+
   GLint location(const char* name) {
     auto it = locations_.find(name);
     if (it == locations_.end())
@@ -270,6 +288,7 @@ class GlTerrainRenderer final : public TerrainRenderer {
   const tiles::Store* imagery_;
   GLuint program_ = 0, vao_ = 0, vertex_buffer_ = 0, index_buffer_ = 0, zero_texture_ = 0;
   size_t vertex_capacity_ = 0;
+  std::vector<Vertex> staging_;
   std::unordered_map<std::string, GLint> locations_;
   std::unordered_map<TileKey, GLuint, geo::TileKeyHash> height_textures_, imagery_textures_;
 };

@@ -48,9 +48,15 @@ struct TileKey {
   std::string to_string() const;  // "level/x/y"
 };
 
+// A cheap, well-mixed hash (packed fields, murmur finaliser): level-of-detail
+// selection probes maps of quads hundreds of thousands of times a second.
 struct TileKeyHash {
   size_t operator()(const TileKey& k) const {
-    return std::hash<uint64_t>()(k.morton() * 31 + static_cast<uint64_t>(k.level));
+    uint64_t h = (static_cast<uint64_t>(k.level) << 58) ^ (static_cast<uint64_t>(k.x) << 29) ^ k.y;
+    h ^= h >> 33;
+    h *= 0xff51afd7ed558ccdULL;
+    h ^= h >> 33;
+    return static_cast<size_t>(h);
   }
 };
 

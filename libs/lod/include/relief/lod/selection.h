@@ -17,8 +17,8 @@ namespace relief::lod {
 
 struct SelectionOptions {
   double pixel_error = 1.0;  // largest allowed screen-space error, pixels
-  // Every quad at the deepest level instead (every finest sample a vertex):
-  // the brute-force reference.
+  // Every quad with data at the deepest level instead, nothing else (with a
+  // mesh of one vertex per sample: the brute-force reference).
   bool full_resolution = false;
   size_t max_quads = 200000;
 };

@@ -8,13 +8,13 @@
 // sample is a vertex (max_level()). Absent tiles and nodata are height 0 (the
 // ellipsoid).
 #include <memory>
-#include <mutex>
 #include <optional>
 #include <unordered_map>
 
 #include "relief/base/lru_cache.h"
 #include "relief/base/result.h"
 #include "relief/lod/mesh_topology.h"
+#include "relief/lod/vec.h"
 #include "relief/tiles/store.h"
 
 namespace relief::lod {
@@ -31,6 +31,12 @@ struct HeightRange {
   double lo = 0, hi = 0;
 };
 
+// An axis-aligned box in ECEF metres.
+struct Box {
+  Vec3 lo, hi;
+};
+
+// Used by one thread at a time (the render thread): its caches are not locked.
 class TerrainModel {
  public:
   // `store` may be null (the bare ellipsoid). Decoded tiles are cached within
@@ -57,6 +63,17 @@ class TerrainModel {
 
   // Heights of the terrain in the quad (plus one sample around it).
   Result<HeightRange> height_range(const geo::TileKey& key);
+  // An ECEF box around the quad's surface between its lowest and highest heights.
+  Result<Box> bounds(const geo::TileKey& key);
+  // Everything selection asks about a quad, from one cache lookup. The error
+  // is measured on first use (it may load the quad's tile): see quad_error.
+  struct QuadInfo {
+    HeightRange range;
+    Box box;
+    double error = -1;  // < 0: not measured yet
+  };
+  Result<QuadInfo*> quad(const geo::TileKey& key);
+  Result<double> quad_error(const geo::TileKey& key, QuadInfo& info);
   // Upper bound, in metres, of |mesh - finest data| over the quad, including
   // the chord error of flat triangles on the curved ellipsoid.
   Result<double> mesh_error(const geo::TileKey& key);
@@ -73,9 +90,10 @@ class TerrainModel {
   const MeshTopology& mesh_;
   int data_max_ = 0, max_level_ = 0, width_ = 512, height_ = 256, border_ = 0;
   LruCache<geo::TileKey, tiles::Raster, geo::TileKeyHash> tiles_;
-  std::mutex mutex_;
   std::unordered_map<geo::TileKey, HeightRange, geo::TileKeyHash> ranges_, subtree_;
   std::unordered_map<geo::TileKey, double, geo::TileKeyHash> errors_;
+  std::unordered_map<geo::TileKey, Box, geo::TileKeyHash> boxes_;
+  std::unordered_map<geo::TileKey, QuadInfo, geo::TileKeyHash> quads_;
 };
 
 }  // namespace relief::lod
