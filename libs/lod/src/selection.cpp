@@ -190,27 +190,37 @@ class Selector {
 
   void classify_neighbours(SelectedQuad& q) {
     const int l = q.key.level;
-    struct Dir {
+    // Levels of the eight neighbours, looked up once: level[dy + 1][dx + 1].
+    std::optional<int> level[3][3];
+    for (int dy = -1; dy <= 1; ++dy) {
+      for (int dx = -1; dx <= 1; ++dx) {
+        if (dx || dy) level[dy + 1][dx + 1] = neighbour_level(q.key, dx, dy);
+      }
+    }
+    auto coarser = [&](int dx, int dy) {
+      const auto& n = level[dy + 1][dx + 1];
+      return n && *n < l;
+    };
+    auto finer = [&](int dx, int dy) {
+      const auto& n = level[dy + 1][dx + 1];
+      return n && *n > l;
+    };
+    const struct {
       int dx, dy;
       uint8_t side;
-    };
-    for (const Dir& d :
-         {Dir{-1, 0, kWest}, Dir{1, 0, kEast}, Dir{0, -1, kNorth}, Dir{0, 1, kSouth}}) {
-      const auto n = neighbour_level(q.key, d.dx, d.dy);
-      if (!n) continue;
-      if (*n > l) q.finer_sides |= d.side;
-      if (*n < l) q.coarse_sides |= d.side;
+    } sides[] = {{-1, 0, kWest}, {1, 0, kEast}, {0, -1, kNorth}, {0, 1, kSouth}};
+    for (const auto& d : sides) {
+      if (finer(d.dx, d.dy)) q.finer_sides |= d.side;
+      if (coarser(d.dx, d.dy)) q.coarse_sides |= d.side;
     }
-    struct CornerDir {
+    // A corner takes the parent's data when any quad sharing it is coarser.
+    const struct {
       int dx, dy;
       uint8_t corner;
-    };
-    for (const CornerDir& c : {CornerDir{-1, -1, kNorthWest}, CornerDir{1, -1, kNorthEast},
-                               CornerDir{-1, 1, kSouthWest}, CornerDir{1, 1, kSouthEast}}) {
-      for (const auto& [dx, dy] : {std::pair{c.dx, 0}, std::pair{0, c.dy}, std::pair{c.dx, c.dy}}) {
-        const auto n = neighbour_level(q.key, dx, dy);
-        if (n && *n < l) q.coarse_corners |= c.corner;
-      }
+    } corners[] = {
+        {-1, -1, kNorthWest}, {1, -1, kNorthEast}, {-1, 1, kSouthWest}, {1, 1, kSouthEast}};
+    for (const auto& c : corners) {
+      if (coarser(c.dx, 0) || coarser(0, c.dy) || coarser(c.dx, c.dy)) q.coarse_corners |= c.corner;
     }
   }
 
