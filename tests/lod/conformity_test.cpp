@@ -4,6 +4,7 @@
 // at most one level.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <map>
 #include <random>
 #include <set>
@@ -56,6 +57,16 @@ TEST(Conformity, RandomRestrictedQuadtreesGiveWatertightMeshes) {
       }
     }
     EXPECT_DOUBLE_EQ(area, 1.0);
+    // The neighbour index array is symmetric: whoever I list lists me.
+    for (size_t i = 0; i < selection->quads.size(); ++i) {
+      for (int32_t n : selection->quads[i].neighbours) {
+        if (n < 0) continue;
+        const auto& other = selection->quads[static_cast<size_t>(n)].neighbours;
+        EXPECT_NE(std::find(other.begin(), other.end(), static_cast<int32_t>(i)), other.end())
+            << selection->quads[i].key.to_string() << " lists "
+            << selection->quads[n].key.to_string();
+      }
+    }
     EXPECT_GT(selection->quads.size(), 50u);
     // Every edge of every triangle, by its exact end points.
     std::map<std::pair<Point, Point>, int> edges;

@@ -64,6 +64,7 @@ class Selector {
     });
     std::sort(s.quads.begin(), s.quads.end(),
               [](const auto& a, const auto& b) { return a.key < b.key; });
+    if (o_.neighbour_indices) link_neighbours(s.quads);
     s.stats.quads_per_level.assign(static_cast<size_t>(terrain_.max_level() + 1), 0);
     for (const auto& q : s.quads) {
       ++s.stats.quads_per_level[static_cast<size_t>(q.key.level)];
@@ -188,6 +189,36 @@ class Selector {
     return leaf->level;
   }
 
+  // The per-quad neighbour index array of the seed's mesh creation (§1.4.3).
+  void link_neighbours(std::vector<SelectedQuad>& quads) {
+    QuadMap<int32_t> index(quads.size());
+    for (size_t i = 0; i < quads.size(); ++i) index.set(quads[i].key, static_cast<int32_t>(i));
+    auto at = [&](const TileKey& k) {
+      const int32_t* i = index.find(k);
+      return i ? *i : -1;
+    };
+    const struct {
+      int dx, dy;
+      int child[2][2];  // the two children of a finer neighbour that touch this side
+    } sides[] = {{-1, 0, {{1, 0}, {1, 1}}},
+                 {1, 0, {{0, 0}, {0, 1}}},
+                 {0, -1, {{0, 1}, {1, 1}}},
+                 {0, 1, {{0, 0}, {1, 0}}}};
+    for (SelectedQuad& q : quads) {
+      for (int s = 0; s < 4; ++s) {
+        const auto n = q.key.neighbour(sides[s].dx, sides[s].dy);
+        if (!n) continue;
+        if (const auto leaf = leaf_containing(*n)) {
+          q.neighbours[2 * s] = at(*leaf);
+        } else {
+          for (int c = 0; c < 2; ++c) {
+            q.neighbours[2 * s + c] = at(n->child(sides[s].child[c][0], sides[s].child[c][1]));
+          }
+        }
+      }
+    }
+  }
+
   void classify_neighbours(SelectedQuad& q) {
     const int l = q.key.level;
     // Levels of the eight neighbours, looked up once: level[dy + 1][dx + 1].
@@ -249,6 +280,7 @@ bool below_horizon(const Vec3& eye, const Vec3& point, double below) {
 Result<Selection> restricted_quadtree(TerrainModel& terrain,
                                       const std::function<bool(const geo::TileKey&)>& split) {
   SelectionOptions o;
+  o.neighbour_indices = true;
   Selector s(terrain, o, split);
   RELIEF_CHECK(s.run());
   return s.result();
