@@ -154,6 +154,7 @@ int run_render(const std::vector<std::string>& argv) {
   lod::SelectionOptions so;
   so.pixel_error = pixel_error;
   so.full_resolution = args->has("--full-resolution");
+  if (imagery) so.texture_max_level = imagery->manifest().max_level;
   auto selection = lod::select_quads(*view, terrain, so);
   if (!selection) return report_error(selection.error().message);
 

@@ -79,6 +79,7 @@ class Selector {
   struct Leaf {
     bool visible = false;
     double error_pixels = 0;
+    bool split_for_samples = false;  // coarser samples than pixels
   };
 
   // Culls and measures one quad: visible, and its projected error bound.
@@ -100,6 +101,16 @@ class Selector {
     const double d = distance_to(box, view_ref.eye);
     const double error = RELIEF_TRY(terrain_.quad_error(key, *info));
     leaf.error_pixels = d > 0 ? error * view_ref.pixels_per_radian / d : INFINITY;
+    // Up to the finest level of the data (or of the draped texture), a quad
+    // must also provide at least one sample per pixel it covers.
+    const int sample_max = std::max(terrain_.data_max_level(), o_.texture_max_level);
+    if (key.level < sample_max && d > 0) {
+      const double spacing = 2 * 3.14159265358979323846 * geo::wgs84::kSemiMajorAxis /
+                             std::ldexp(terrain_.tile_width(), key.level);
+      leaf.split_for_samples = spacing * view_ref.pixels_per_radian / d > 1;
+    } else if (key.level < sample_max) {
+      leaf.split_for_samples = true;
+    }
     return leaf;
   }
 

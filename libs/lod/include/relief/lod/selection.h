@@ -2,7 +2,8 @@
 // Level-of-detail selection (seed 003 §1.4.2): walk the quadtree from level 0,
 // bound each quad from metadata and cached error bounds, cull by the frustum
 // and by the ellipsoid's horizon, split a quad while its mesh error projected
-// at its nearest point exceeds the pixel-error threshold, then enforce the
+// at its nearest point exceeds the pixel-error threshold (or, up to the data's
+// finest level, while its samples are coarser than pixels), then enforce the
 // restricted property (quads sharing an edge or a corner differ by at most one
 // level), which makes the meshes conform.
 #include <array>
@@ -18,6 +19,10 @@ namespace relief::lod {
 
 struct SelectionOptions {
   double pixel_error = 1.0;  // largest allowed screen-space error, pixels
+  // Finest level of a draped texture: up to it (and up to the elevation
+  // data's finest level) quads also split while a sample covers more than a
+  // pixel (seed 003 §1.4.2, step 5).
+  int texture_max_level = -1;
   // Every quad with data at the deepest level instead, nothing else (with a
   // mesh of one vertex per sample: the brute-force reference).
   bool full_resolution = false;
