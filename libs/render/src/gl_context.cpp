@@ -16,6 +16,7 @@ class EglContext final : public GlContext {
     eglMakeCurrent(display_, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
     eglDestroyContext(display_, context_);
     eglTerminate(display_);
+    eglReleaseThread();  // the thread's EGL state, or it outlives the context
   }
   std::string renderer() const override {
     return fmt::format("{} ({})", reinterpret_cast<const char*>(glGetString(GL_RENDERER)),
