@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The main job on bundled data: builds relief, turns the SRTM tiles of the
-# eastern Pyrenees and Catalonia into a tile pyramid, verifies it and describes
-# it; then builds the Umbra SAR image into a store, reduces its speckle and
+# eastern Pyrenees and Catalonia into a tile pyramid, verifies it, describes
+# it and renders a still of it; then builds the Umbra SAR image into a store, reduces its speckle and
 # dynamic range on every level, and detects point targets.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -13,6 +13,9 @@ OUT=${1:-out/pyrenees}
   -o "$OUT" --kind elevation --overwrite
 "$RELIEF" verify "$OUT"
 "$RELIEF" info "$OUT"
+# A still of the pyramid, headless (EGL; Mesa's llvmpipe without a GPU).
+"$RELIEF" render "$OUT" --look-at 1.5,42.5,1500,40000,0,-30 --size 1280x720 \
+  -o "$OUT.png" --stats "$OUT-frame.json"
 
 SAR=$(dirname "$OUT")/umbra
 rm -rf "$SAR" "$SAR-lee" "$SAR-grey"
