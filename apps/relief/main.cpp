@@ -22,6 +22,7 @@ commands:
   fuse     combine stores of one kind tile by tile (weighted blend or void filling)
   detect   find point targets in a SAR image: GeoJSON, analysis JSON and plot
   render   render a still of an elevation store (headless OpenGL), optionally with imagery
+  serve    serve a store read-only over HTTP
 
 Run 'relief <command> --help' for the options of a command.
 )";
@@ -68,6 +69,7 @@ int main(int argc, char** argv) {
     if (command == "fuse") return relief::cli::run_fuse(args);
     if (command == "detect") return relief::cli::run_detect(args);
     if (command == "render") return relief::cli::run_render(args);
+    if (command == "serve") return relief::cli::run_serve(args);
     if (command == "--version") {
       std::puts("relief 0.1.0");
       return 0;
