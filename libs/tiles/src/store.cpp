@@ -11,38 +11,43 @@ namespace relief::tiles {
 namespace fs = std::filesystem;
 
 Result<Store> Store::open(const fs::path& root) {
-  const fs::path manifest_path = root / kManifestName;
   std::error_code ec;
   if (!fs::is_directory(root, ec)) {
     return fail(fmt::format("{}: no such store directory", root.string()));
   }
-  if (!fs::exists(manifest_path, ec)) {
+  if (!fs::exists(root / kManifestName, ec)) {
     return fail(fmt::format("{}: not a relief store (no {}; an interrupted build?)", root.string(),
                             kManifestName));
   }
-  auto text = read_text_file(manifest_path);
-  if (!text) return std::unexpected(text.error());
-  auto manifest = Manifest::from_json(*text, manifest_path.string());
-  if (!manifest) return std::unexpected(manifest.error());
-  auto grid = geo::TileGrid::create(manifest->tile_log2_height, manifest->border);
-  if (!grid) return fail(fmt::format("{}: {}", manifest_path.string(), grid.error().message));
+  return open(local_source(root));
+}
+
+Result<Store> Store::open(std::shared_ptr<const StoreSource> source) {
+  const std::string name = source->name();
+  const std::string manifest_name = (fs::path(name) / kManifestName).string();
+  auto bytes = RELIEF_TRY(source->fetch(kManifestName));
+  const std::string text(reinterpret_cast<const char*>(bytes.data()), bytes.size());
+  auto manifest = RELIEF_TRY(Manifest::from_json(text, manifest_name));
+  auto grid = geo::TileGrid::create(manifest.tile_log2_height, manifest.border);
+  if (!grid) return fail(fmt::format("{}: {}", manifest_name, grid.error().message));
 
   Store store;
-  store.root_ = root;
-  store.manifest_ = std::move(*manifest);
+  store.root_ = name;
+  store.source_ = std::move(source);
+  store.manifest_ = std::move(manifest);
   store.grid_ = *grid;
   for (int level = 0; level <= store.manifest_.max_level; ++level) {
     if (level < store.manifest_.min_level) {
       store.indices_.emplace_back(level);
       continue;
     }
-    const fs::path path = root / level_index_relative_path(level);
-    auto bytes = read_file(path);
-    if (!bytes) return std::unexpected(bytes.error());
-    auto index = LevelIndex::parse(*bytes, path.string());
+    const std::string relative = level_index_relative_path(level);
+    const std::string path = (fs::path(name) / relative).string();
+    auto index_bytes = RELIEF_TRY(store.source_->fetch(relative));
+    auto index = LevelIndex::parse(index_bytes, path);
     if (!index) return std::unexpected(index.error());
     if (index->level() != level)
-      return fail(fmt::format("{}: index is for level {}", path.string(), index->level()));
+      return fail(fmt::format("{}: index is for level {}", path, index->level()));
     store.indices_.push_back(std::move(*index));
   }
   return store;
@@ -63,7 +68,7 @@ Result<Tile> Store::read_tile(const geo::TileKey& key) const {
   if (!has_tile(key)) {
     return fail(fmt::format("{}: tile {} is not in the store", path.string(), key.to_string()));
   }
-  auto bytes = read_file(path);
+  auto bytes = source_->fetch(tile_relative_path(key));
   if (!bytes) return std::unexpected(bytes.error());
   auto tile = decode_tile(*bytes, path.string());
   if (!tile) return tile;

@@ -9,20 +9,24 @@
 #include "relief/geo/tile_grid.h"
 #include "relief/tiles/level_index.h"
 #include "relief/tiles/manifest.h"
+#include "relief/tiles/store_source.h"
 #include "relief/tiles/tile_file.h"
 
 namespace relief::tiles {
 
 class Store {
  public:
-  // Reads the manifest and every level index.
+  // Reads the manifest and every level index of a local store directory.
   static Result<Store> open(const std::filesystem::path& root);
+  // The same through any source (HTTP servers: libs/net).
+  static Result<Store> open(std::shared_ptr<const StoreSource> source);
 
   const std::filesystem::path& root() const { return root_; }
   const Manifest& manifest() const { return manifest_; }
   const geo::TileGrid& grid() const { return grid_; }
   const LevelIndex& index(int level) const;  // empty index outside the level range
 
+  // The tile's file under root(): a path for local stores, a URL otherwise.
   std::filesystem::path tile_path(const geo::TileKey& key) const;
   bool has_tile(const geo::TileKey& key) const { return index(key.level).find(key) != nullptr; }
   // Reads and checks one tile; a tile absent from the index is an error too.
@@ -33,6 +37,7 @@ class Store {
 
  private:
   std::filesystem::path root_;
+  std::shared_ptr<const StoreSource> source_;
   Manifest manifest_;
   geo::TileGrid grid_;
   std::vector<LevelIndex> indices_;

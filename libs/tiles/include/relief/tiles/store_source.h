@@ -1,0 +1,32 @@
+#pragma once
+// Where a store's files come from: a local directory, or HTTP servers (see
+// libs/net). A Store reads every file through its source, so the same code
+// renders, verifies and processes local and remote stores.
+#include <cstddef>
+#include <filesystem>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "relief/base/result.h"
+
+namespace relief::tiles {
+
+class StoreSource {
+ public:
+  virtual ~StoreSource() = default;
+  // The store's location for messages ("/data/dem", "http://host:8080/dem").
+  virtual std::string name() const = 0;
+  // The bytes of the file at `relative` ("manifest.json", "3/index.rli",
+  // tile paths); errors name the file.
+  virtual Result<std::vector<std::byte>> fetch(const std::string& relative) const = 0;
+  // Whether the bytes are a whole, uncorrupted store file of that name
+  // (checksums of tiles and indices, JSON of the manifest).
+  static Status verify(const std::string& relative, std::span<const std::byte> bytes);
+};
+
+// A store directory on the local file system.
+std::shared_ptr<const StoreSource> local_source(const std::filesystem::path& root);
+
+}  // namespace relief::tiles
