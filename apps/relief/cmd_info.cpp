@@ -5,6 +5,7 @@
 
 #include "args.h"
 #include "commands.h"
+#include "open_store.h"
 #include "relief/base/units.h"
 #include "relief/tiles/store.h"
 
@@ -23,7 +24,7 @@ int run_info(const std::vector<std::string>& argv) {
   auto args = Args::parse(argv, {{"--json", "", false}}, "info");
   if (!args) return report_error(args.error().message);
   if (args->positional().size() != 1) return report_error("info: expected exactly one STORE");
-  auto store = tiles::Store::open(args->positional()[0]);
+  auto store = open_store(args->positional()[0]);
   if (!store) return report_error(store.error().message);
   const auto& m = store->manifest();
   const auto& g = store->grid();

@@ -5,6 +5,7 @@
 
 #include "args.h"
 #include "commands.h"
+#include "open_store.h"
 #include "relief/base/file_io.h"
 #include "relief/lod/selection.h"
 #include "relief/render/terrain_renderer.h"
@@ -40,7 +41,7 @@ options:
 )";
 
 Result<tiles::Store> open_kind(const std::string& path, tiles::DatasetKind kind, const char* role) {
-  tiles::Store s = RELIEF_TRY(tiles::Store::open(path));
+  tiles::Store s = RELIEF_TRY(open_store(path));
   if (s.manifest().kind != kind) {
     return fail(fmt::format("{}: holds {} data; {} must be an {} store", path,
                             tiles::to_string(s.manifest().kind), role, tiles::to_string(kind)));
