@@ -7,6 +7,7 @@
 #include "commands.h"
 #include "open_store.h"
 #include "relief/base/file_io.h"
+#include "relief/base/units.h"
 #include "relief/lod/selection.h"
 #include "relief/render/terrain_renderer.h"
 #include "relief/tiles/codec.h"
@@ -38,10 +39,13 @@ options:
   --full-resolution  every finest sample a vertex (the brute-force reference)
   --sky R,G,B        background colour, 0-255 (default 156,189,224)
   --stats FILE       per-frame statistics as JSON
+  --cache DIR        for a store given as http:// URL(s): keep fetched files under DIR
+  --cache-size SIZE  budget of that disk cache (default 1GiB)
 )";
 
-Result<tiles::Store> open_kind(const std::string& path, tiles::DatasetKind kind, const char* role) {
-  tiles::Store s = RELIEF_TRY(open_store(path));
+Result<tiles::Store> open_kind(const std::string& path, tiles::DatasetKind kind, const char* role,
+                               const std::string& cache_dir = "", uint64_t cache_bytes = 0) {
+  tiles::Store s = RELIEF_TRY(open_store(path, cache_dir, cache_bytes));
   if (s.manifest().kind != kind) {
     return fail(fmt::format("{}: holds {} data; {} must be an {} store", path,
                             tiles::to_string(s.manifest().kind), role, tiles::to_string(kind)));
@@ -81,7 +85,9 @@ int run_render(const std::vector<std::string>& argv) {
                            {"--mesh-level"},
                            {"--full-resolution", "", false},
                            {"--sky"},
-                           {"--stats"}},
+                           {"--stats"},
+                           {"--cache"},
+                           {"--cache-size"}},
                           "render");
   if (!args) return report_error(args.error().message);
   if (args->positional().size() != 1) return report_error("render: expected exactly one STORE");
@@ -118,7 +124,15 @@ int run_render(const std::vector<std::string>& argv) {
     for (int i = 0; i < 3; ++i) sky[i] = static_cast<float>(std::clamp((*c)[i], 0.0, 255.0) / 255);
   }
 
-  auto store = open_kind(args->positional()[0], tiles::DatasetKind::Elevation, "STORE");
+  uint64_t cache_bytes = uint64_t{1} << 30;
+  if (auto size = args->get("--cache-size")) {
+    auto bytes = parse_byte_size(*size);
+    if (!bytes) return report_error("--cache-size: " + bytes.error().message);
+    cache_bytes = *bytes;
+  }
+  const std::string cache_dir = args->get("--cache").value_or("");
+  auto store = open_kind(args->positional()[0], tiles::DatasetKind::Elevation, "STORE", cache_dir,
+                         cache_bytes);
   if (!store) return report_error(store.error().message);
   std::optional<tiles::Store> imagery;
   if (auto path = args->get("--imagery")) {

@@ -94,23 +94,14 @@ const std::string kError =
 const std::string kMissing =
     "HTTP/1.1 404 Not Found\r\nContent-Length: 0\r\nConnection: close\r\n\r\n";
 
-class HttpSourceTest : public ::testing::Test {
+class HttpSourceTest : public SmallStoreSuite {
  protected:
-  static void SetUpTestSuite() {
-    dir_ = new ScratchDir("http_source");
-    store_ = dir_->path() / "store";
-    ASSERT_EQ(run_relief({"build", data("srtm/N42E001.hgt.zip"), "--kind", "elevation", "-o",
-                          store_.string(), "-q"})
-                  .exit_code,
-              0);
-  }
-  static void TearDownTestSuite() { delete dir_; }
   static std::string file(const std::string& relative) {
-    auto b = read_file(store_ / relative);
+    auto b = read_file(store() / relative);
     return std::string(reinterpret_cast<const char*>(b->data()), b->size());
   }
   static std::string a_tile() {
-    auto s = tiles::Store::open(store_);
+    auto s = tiles::Store::open(store());
     return tiles::tile_relative_path(s->index(s->manifest().max_level).entries().front().key);
   }
   static net::HttpOptions fast(std::vector<std::string> urls) {
@@ -120,8 +111,6 @@ class HttpSourceTest : public ::testing::Test {
     o.timeout_ms = 3000;
     return o;
   }
-  static inline ScratchDir* dir_ = nullptr;
-  static inline fs::path store_;
 };
 
 // Every tile of the remote store decodes to the local one's samples.
@@ -142,7 +131,7 @@ void expect_same_store(const tiles::Store& local, const tiles::Store& remote) {
 TEST_F(HttpSourceTest, RemoteStoresReadLikeLocalOnes) {
   int port = 0;
   ::close(listen_any(port));
-  const int pid = spawn_relief({"serve", store_.string(), "--port", std::to_string(port)});
+  const int pid = spawn_relief({"serve", store().string(), "--port", std::to_string(port)});
   const std::string url = "http://127.0.0.1:" + std::to_string(port) + "/";
   auto source = net::HttpSource::create(fast({url}));
   ASSERT_TRUE(source);
@@ -153,7 +142,7 @@ TEST_F(HttpSourceTest, RemoteStoresReadLikeLocalOnes) {
     if (!remote) std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
   ASSERT_TRUE(remote) << remote.error().message;
-  expect_same_store(*tiles::Store::open(store_), *remote);
+  expect_same_store(*tiles::Store::open(store()), *remote);
   // Through the command line, too.
   auto info = run_relief({"info", url});
   EXPECT_EQ(info.exit_code, 0) << info.err;
@@ -213,13 +202,13 @@ TEST_F(HttpSourceTest, MirrorsFailOverAndDistributedTilesStayOnTheirServer) {
   const std::string dead = "http://127.0.0.1:" + std::to_string(dead_port) + "/";
   FakeServer alive([&](const std::string& path, int) {
     std::error_code ec;
-    return fs::is_regular_file(store_ / path, ec) ? ok(file(path)) : kMissing;
+    return fs::is_regular_file(store() / path, ec) ? ok(file(path)) : kMissing;
   });
   auto mirrors = net::HttpSource::create(fast({dead, alive.url()}));
   std::shared_ptr<const tiles::StoreSource> m = *mirrors;
   auto remote = tiles::Store::open(m);
   ASSERT_TRUE(remote) << remote.error().message;
-  expect_same_store(*tiles::Store::open(store_), *remote);
+  expect_same_store(*tiles::Store::open(store()), *remote);
   EXPECT_GT((*mirrors)->stats().failovers, 0u);
   // Distributed: tile i lives on server i mod 2; with server 0 dead, exactly
   // the tiles of server 1 can be read.
@@ -227,7 +216,7 @@ TEST_F(HttpSourceTest, MirrorsFailOverAndDistributedTilesStayOnTheirServer) {
   dist_options.layout = net::ServerLayout::Distributed;
   dist_options.attempts = 1;
   auto dist = net::HttpSource::create(dist_options);
-  auto local = tiles::Store::open(store_);
+  auto local = tiles::Store::open(store());
   int readable = 0, unreadable = 0;
   for (const auto& e : local->index(local->manifest().max_level).entries()) {
     const bool ok_read = (*dist)->fetch(tiles::tile_relative_path(e.key)).has_value();

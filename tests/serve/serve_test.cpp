@@ -124,15 +124,11 @@ std::string file_text(const fs::path& p) {
   return std::string(reinterpret_cast<const char*>(bytes->data()), bytes->size());
 }
 
-class ServeTest : public ::testing::Test {
+class ServeTest : public SmallStoreSuite {
  protected:
   static void SetUpTestSuite() {
-    dir_ = new ScratchDir("serve");
-    store_ = dir_->path() / "store";
-    ASSERT_EQ(run_relief({"build", data("srtm/N42E001.hgt.zip"), "--kind", "elevation", "-o",
-                          store_.string(), "-q"})
-                  .exit_code,
-              0);
+    SmallStoreSuite::SetUpTestSuite();
+    store_ = store();
     std::ofstream(store_ / "secret.txt") << "not a store file";
     port_ = free_port();
     pid_ = spawn_relief({"serve", store_.string(), "--port", std::to_string(port_)});
@@ -144,7 +140,7 @@ class ServeTest : public ::testing::Test {
     ::waitpid(pid_, &status, 0);
     EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0)
         << "relief serve did not stop cleanly";
-    delete dir_;
+    SmallStoreSuite::TearDownTestSuite();
   }
   static std::string some_tile() {
     for (const auto& e : fs::recursive_directory_iterator(store_)) {
@@ -152,7 +148,6 @@ class ServeTest : public ::testing::Test {
     }
     return {};
   }
-  static inline ScratchDir* dir_ = nullptr;
   static inline fs::path store_;
   static inline int port_ = 0, pid_ = 0;
 };
@@ -233,7 +228,7 @@ TEST_F(ServeTest, ManyClientsAtOnce) {
 }
 
 TEST_F(ServeTest, NginxServesTheSameStoreIdentically) {
-  const fs::path prefix = dir_->path() / "nginx";
+  const fs::path prefix = scratch().path() / "nginx";
   fs::create_directories(prefix / "logs");
   const int port = free_port();
   std::ofstream(prefix / "nginx.conf")

@@ -99,4 +99,18 @@ bool is_one_line_error(const RunResult& r, const std::string& needle) {
          r.err.find(needle) != std::string::npos;
 }
 
+void SmallStoreSuite::SetUpTestSuite() {
+  dir_ = new ScratchDir("small_store");
+  store_ = dir_->path() / "store";
+  ASSERT_EQ(run_relief({"build", data("srtm/N42E001.hgt.zip"), "--kind", "elevation", "-o",
+                        store_.string(), "-q"})
+                .exit_code,
+            0);
+}
+
+void SmallStoreSuite::TearDownTestSuite() {
+  delete dir_;
+  dir_ = nullptr;
+}
+
 }  // namespace relief::testing

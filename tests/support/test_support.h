@@ -1,6 +1,8 @@
 #pragma once
 // Helpers shared by the integration tests: scratch directories, running the
 // relief binary, and building stores from the bundled data.
+#include <gtest/gtest.h>
+
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -37,6 +39,19 @@ int spawn_relief(const std::vector<std::string>& args);
 // Runs the relief binary with the arguments (shell-quoted), optionally prefixed
 // by a shell snippet (e.g. "ulimit -f 100;").
 RunResult run_relief(const std::vector<std::string>& args, const std::string& shell_prefix = "");
+
+// A fixture that builds the N42E001 SRTM tile into a store once per suite.
+class SmallStoreSuite : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite();
+  static void TearDownTestSuite();
+  static const std::filesystem::path& store() { return store_; }
+  static ScratchDir& scratch() { return *dir_; }
+
+ private:
+  static inline ScratchDir* dir_ = nullptr;
+  static inline std::filesystem::path store_;
+};
 
 // Whether `r` failed with a one-line error on stderr that contains `needle`.
 bool is_one_line_error(const RunResult& r, const std::string& needle);
