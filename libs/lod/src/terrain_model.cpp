@@ -148,7 +148,6 @@ Result<HeightRange> TerrainModel::subtree_range(const geo::TileKey& key) {
 
 Result<HeightRange> TerrainModel::height_range(const geo::TileKey& key) {
   if (key.level <= data_max_) return subtree_range(key);
-  if (auto it = ranges_.find(key); it != ranges_.end()) return it->second;
   const DataWindow w = window(key);
   HeightRange r{0, 0};
   if (w.tile) {
@@ -166,20 +165,13 @@ Result<HeightRange> TerrainModel::height_range(const geo::TileKey& key) {
       }
     }
   }
-  ranges_[key] = r;
   return r;
-}
-
-Result<Box> TerrainModel::bounds(const geo::TileKey& key) {
-  if (auto it = boxes_.find(key); it != boxes_.end()) return it->second;
-  const Box box = quad_box(key, RELIEF_TRY(height_range(key)));
-  boxes_[key] = box;
-  return box;
 }
 
 Result<TerrainModel::QuadInfo*> TerrainModel::quad(const geo::TileKey& key) {
   if (auto it = quads_.find(key); it != quads_.end()) return &it->second;
-  QuadInfo info{RELIEF_TRY(height_range(key)), RELIEF_TRY(bounds(key))};
+  const HeightRange range = RELIEF_TRY(height_range(key));
+  const QuadInfo info{range, quad_box(key, range)};
   return &quads_.emplace(key, info).first->second;
 }
 
@@ -189,7 +181,6 @@ Result<double> TerrainModel::quad_error(const geo::TileKey& key, QuadInfo& info)
 }
 
 Result<double> TerrainModel::mesh_error(const geo::TileKey& key) {
-  if (auto it = errors_.find(key); it != errors_.end()) return it->second;
   // Flat triangles under the curved ellipsoid: the sagitta of one square.
   const double square = 2 * kPi / std::ldexp(1.0, key.level) / mesh_.squares_x();
   double error = geo::wgs84::kSemiMajorAxis * square * square / 8;
@@ -206,7 +197,6 @@ Result<double> TerrainModel::mesh_error(const geo::TileKey& key) {
   } else {
     error += RELIEF_TRY(exact_mesh_error(key));
   }
-  errors_[key] = error;
   return error;
 }
 

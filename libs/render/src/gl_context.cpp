@@ -72,6 +72,19 @@ std::string gl_error() {
   return e == GL_NO_ERROR ? std::string() : fmt::format("GL error 0x{:x}", e);
 }
 
+namespace {
+// The compile or link log of a shader or program.
+std::string info_log(GLuint id, bool program) {
+  char log[4096] = {};
+  if (program) {
+    glGetProgramInfoLog(id, sizeof log, nullptr, log);
+  } else {
+    glGetShaderInfoLog(id, sizeof log, nullptr, log);
+  }
+  return log;
+}
+}  // namespace
+
 Result<GLuint> link_program(const char* vertex_source, const char* fragment_source) {
   auto compile = [](GLenum type, const char* source) -> Result<GLuint> {
     const GLuint s = glCreateShader(type);
@@ -80,10 +93,9 @@ Result<GLuint> link_program(const char* vertex_source, const char* fragment_sour
     GLint ok = 0;
     glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
     if (!ok) {
-      char log[4096];
-      glGetShaderInfoLog(s, sizeof log, nullptr, log);
+      const std::string log = info_log(s, false);
       glDeleteShader(s);
-      return fail(std::string("GLSL: ") + log);
+      return fail("GLSL: " + log);
     }
     return s;
   };
@@ -98,10 +110,9 @@ Result<GLuint> link_program(const char* vertex_source, const char* fragment_sour
   GLint ok = 0;
   glGetProgramiv(p, GL_LINK_STATUS, &ok);
   if (!ok) {
-    char log[4096];
-    glGetProgramInfoLog(p, sizeof log, nullptr, log);
+    const std::string log = info_log(p, true);
     glDeleteProgram(p);
-    return fail(std::string("GLSL link: ") + log);
+    return fail("GLSL link: " + log);
   }
   return p;
 }

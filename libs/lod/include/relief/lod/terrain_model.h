@@ -61,12 +61,10 @@ class TerrainModel {
   using TilePtr = std::shared_ptr<const tiles::Raster>;
   Result<TilePtr> tile(const geo::TileKey& key);
 
-  // Heights of the terrain in the quad (plus one sample around it).
-  Result<HeightRange> height_range(const geo::TileKey& key);
-  // An ECEF box around the quad's surface between its lowest and highest heights.
-  Result<Box> bounds(const geo::TileKey& key);
-  // Everything selection asks about a quad, from one cache lookup. The error
-  // is measured on first use (it may load the quad's tile): see quad_error.
+  // Everything selection asks about a quad, cached per quad: the heights of
+  // the terrain in it (plus one sample around), an ECEF box around its
+  // surface between them, and the mesh error bound, measured on first use
+  // (it may load the quad's tile): see quad_error.
   struct QuadInfo {
     HeightRange range;
     Box box;
@@ -74,15 +72,16 @@ class TerrainModel {
   };
   Result<QuadInfo*> quad(const geo::TileKey& key);
   Result<double> quad_error(const geo::TileKey& key, QuadInfo& info);
-  // Upper bound, in metres, of |mesh - finest data| over the quad, including
-  // the chord error of flat triangles on the curved ellipsoid.
-  Result<double> mesh_error(const geo::TileKey& key);
 
   // Bilinear height at interior sample coordinates (x, y) of a bordered tile,
   // exactly as the renderer's vertex shader computes it.
   static float bilinear(const tiles::Raster& bordered, int border, double x, double y);
 
  private:
+  Result<HeightRange> height_range(const geo::TileKey& key);
+  // Upper bound, in metres, of |mesh - finest data| over the quad, including
+  // the chord error of flat triangles on the curved ellipsoid.
+  Result<double> mesh_error(const geo::TileKey& key);
   Result<HeightRange> subtree_range(const geo::TileKey& key);
   Result<double> exact_mesh_error(const geo::TileKey& key);
 
@@ -90,9 +89,7 @@ class TerrainModel {
   const MeshTopology& mesh_;
   int data_max_ = 0, max_level_ = 0, width_ = 512, height_ = 256, border_ = 0;
   LruCache<geo::TileKey, tiles::Raster, geo::TileKeyHash> tiles_;
-  std::unordered_map<geo::TileKey, HeightRange, geo::TileKeyHash> ranges_, subtree_;
-  std::unordered_map<geo::TileKey, double, geo::TileKeyHash> errors_;
-  std::unordered_map<geo::TileKey, Box, geo::TileKeyHash> boxes_;
+  std::unordered_map<geo::TileKey, HeightRange, geo::TileKeyHash> subtree_;
   std::unordered_map<geo::TileKey, QuadInfo, geo::TileKeyHash> quads_;
 };
 
