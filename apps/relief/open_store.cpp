@@ -5,14 +5,22 @@
 
 namespace relief::cli {
 
-Result<tiles::Store> open_store(const std::string& location, const std::string& cache_dir,
-                                uint64_t cache_bytes) {
-  if (!location.starts_with("http://") && !location.starts_with("https://")) {
-    return tiles::Store::open(location);
+Result<tiles::Store> open_store(const std::string& location, const StoreAccess& access) {
+  const bool remote = location.starts_with("http://") || location.starts_with("https://");
+  const bool simulated = access.link.latency.count() > 0 || access.link.bits_per_second > 0;
+  std::shared_ptr<const tiles::StoreSource> source;
+  if (remote) {
+    source = RELIEF_TRY(net::source_for(location));
+  } else {
+    // Checks the directory with clear errors first.
+    tiles::Store local = RELIEF_TRY(tiles::Store::open(location));
+    if (!simulated) return local;
+    source = tiles::local_source(location);
   }
-  auto source = RELIEF_TRY(net::source_for(location));
-  if (!cache_dir.empty()) {
-    auto cache = RELIEF_TRY(net::DiskCache::create(std::move(source), cache_dir, cache_bytes));
+  if (simulated) source = stream::throttled_source(std::move(source), access.link);
+  if (remote && !access.cache_dir.empty()) {
+    auto cache =
+        RELIEF_TRY(net::DiskCache::create(std::move(source), access.cache_dir, access.cache_bytes));
     source = std::move(cache);
   }
   return tiles::Store::open(std::move(source));

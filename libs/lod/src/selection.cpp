@@ -5,6 +5,7 @@
 #include <deque>
 #include <functional>
 #include <optional>
+#include <unordered_set>
 
 #include "quad_map.h"
 
@@ -44,7 +45,13 @@ class Selector {
       : view_(nullptr), terrain_(t), o_(o), rule_(std::move(rule)) {}
 
   Status run() {
-    RELIEF_CHECK(visit(TileKey{0, 0, 0}));
+    const TileKey root{0, 0, 0};
+    if (const auto w = terrain_.window(root); w.tile && !terrain_.available(*w.tile)) {
+      terrain_.request(*w.tile, INFINITY);  // nothing to draw yet
+      ++waiting_;
+      return {};
+    }
+    RELIEF_CHECK(visit(root));
     RELIEF_CHECK(restrict_levels());
     return {};
   }
@@ -72,6 +79,7 @@ class Selector {
       s.stats.max_error_pixels = std::max(s.stats.max_error_pixels, q.error_pixels);
     }
     s.stats.quads = static_cast<uint32_t>(s.quads.size());
+    s.stats.waiting = waiting_;
     return s;
   }
 
@@ -126,14 +134,78 @@ class Selector {
     return true;
   }
 
+  // View priority of loading a quad's data (seed 002: screen coverage,
+  // distance from the screen centre, depth): the pixels its box covers,
+  // weighted down away from the centre. Higher first.
+  double priority(const Box& box) const {
+    const Vec3 centre = (box.lo + box.hi) * 0.5, to = centre - view_->eye;
+    const double d = std::max(distance_to(box, view_->eye), view_->near);
+    const double size = length(box.hi - box.lo) * view_->pixels_per_radian / d;
+    const double pixels = std::min(size * size, double(view_->width) * view_->height);
+    const double off = std::acos(std::clamp(dot(to, view_->forward) / length(to), -1.0, 1.0)) /
+                       std::atan(view_->tan_half_y);
+    return pixels / (1 + off * off);
+  }
+
+  // Interactive frames draw only resident data: a quad splits only when the
+  // data of each of its visible children is available now; the missing ones
+  // are requested. Deeper than the store, children draw the same tile.
+  Result<bool> children_available(const TileKey& key) {
+    if (terrain_.blocking()) return true;
+    if (frozen_.contains(key)) return false;
+    bool all = true;
+    for (int c = 0; c < 4; ++c) {
+      const TileKey child = key.child(c & 1, c >> 1);
+      const DataWindow w = terrain_.window(child);
+      if (!w.tile || terrain_.available(*w.tile)) continue;
+      if (child.level > terrain_.data_max_level()) {
+        // An unloaded quad, culled before (its bounds need the tile): only
+        // restriction splits it. Lowest priority.
+        terrain_.request(*w.tile, 0);
+        ++waiting_;
+        return false;
+      }
+      TerrainModel::QuadInfo* info = RELIEF_TRY(terrain_.quad(child));
+      if (outside_frustum(info->box, *view_) || hidden_by_horizon(info->box, info->range)) continue;
+      const double p = priority(info->box);
+      terrain_.request(*w.tile, p);
+      ++waiting_;
+      all = false;
+      RELIEF_CHECK(want_below(child, p));
+    }
+    return all;
+  }
+
+  // Requests the data the view will want below a quad whose own data is not
+  // resident yet, each tile ranked below its ancestors (which load first), so
+  // a deep view does not wait one round trip per level. Needs no tiles: above
+  // the store's finest level, errors come from the index.
+  Status want_below(const TileKey& key, double cap) {
+    if (key.level + 1 > terrain_.data_max_level()) return {};
+    const Leaf leaf = RELIEF_TRY(assess(key));
+    if (!leaf.visible || leaf.error_pixels <= o_.pixel_error) return {};
+    for (int c = 0; c < 4; ++c) {
+      const TileKey child = key.child(c & 1, c >> 1);
+      const DataWindow w = terrain_.window(child);
+      if (!w.tile) continue;
+      TerrainModel::QuadInfo* info = RELIEF_TRY(terrain_.quad(child));
+      if (outside_frustum(info->box, *view_) || hidden_by_horizon(info->box, info->range)) continue;
+      const double p = std::min(priority(info->box), cap * 0.5);
+      terrain_.request(*w.tile, p);
+      RELIEF_CHECK(want_below(child, p));
+    }
+    return {};
+  }
+
   Status visit(const TileKey& key) {
     if (leaves_.size() > o_.max_quads) {
       return fail(
           fmt::format("level of detail: more than {} quads; raise --pixel-error", o_.max_quads));
     }
     const Leaf leaf = RELIEF_TRY(assess(key));
-    const bool split =
+    bool split =
         leaf.visible && key.level < terrain_.max_level() && leaf.error_pixels > o_.pixel_error;
+    if (split) split = RELIEF_TRY(children_available(key));
     if (!split) {
       leaves_.set(key, leaf);
       return {};
@@ -161,6 +233,22 @@ class Selector {
     return {};
   }
 
+  // Makes `key` a leaf again, dropping the quads below it; it will not split
+  // again in this selection.
+  Status coarsen(const TileKey& key) {
+    std::vector<TileKey> below;
+    leaves_.for_each([&](const TileKey& k, const Leaf&) {
+      if (k.level > key.level &&
+          TileKey{key.level, k.x >> (k.level - key.level), k.y >> (k.level - key.level)} == key) {
+        below.push_back(k);
+      }
+    });
+    for (const TileKey& k : below) leaves_.erase(k);
+    leaves_.set(key, RELIEF_TRY(assess(key)));
+    frozen_.insert(key);
+    return {};
+  }
+
   // Splits leaves until quads sharing an edge or a corner differ by at most one level.
   Status restrict_levels() {
     std::deque<TileKey> work;
@@ -177,6 +265,15 @@ class Selector {
           const std::optional<TileKey> coarse = leaf_containing(*n);
           if (coarse && coarse->level < key.level - 1) {
             const TileKey victim = *coarse;
+            if (!RELIEF_TRY(children_available(victim))) {
+              // Interactive: the coarse side has no finer data yet, so the
+              // fine side comes back up; everything is checked again.
+              RELIEF_CHECK(coarsen(*key.parent()));
+              work.clear();
+              leaves_.for_each([&](const TileKey& k, const Leaf&) { work.push_back(k); });
+              dx = dy = 2;  // `key` is gone: next in the queue
+              break;
+            }
             RELIEF_CHECK(split(victim, work));
             work.push_back(key);
             if (leaves_.size() > o_.max_quads) {
@@ -271,6 +368,8 @@ class Selector {
   const SelectionOptions& o_;
   std::function<bool(const TileKey&)> rule_;
   QuadMap<Leaf> leaves_;
+  std::unordered_set<TileKey, geo::TileKeyHash> frozen_;  // coarsened: stay leaves
+  uint32_t waiting_ = 0;                                  // data requested, not resident
 };
 
 }  // namespace

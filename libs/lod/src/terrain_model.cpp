@@ -1,7 +1,10 @@
 #include "relief/lod/terrain_model.h"
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
+
+#include <fmt/format.h>
 
 #include "relief/geo/ellipsoid.h"
 #include "relief/lod/camera.h"
@@ -9,6 +12,12 @@
 namespace relief::lod {
 
 namespace {
+
+class NoTiles final : public TileProvider {
+ public:
+  bool blocking() const override { return true; }
+  Result<TilePtr> get(const geo::TileKey&) override { return TilePtr{}; }
+};
 
 constexpr double kPi = 3.14159265358979323846;
 
@@ -52,9 +61,23 @@ Box quad_box(const geo::TileKey& key, const HeightRange& range) {
 
 TerrainModel::TerrainModel(const tiles::Store* store, const MeshTopology& mesh,
                            uint64_t cache_bytes)
+    : TerrainModel(store, mesh, store ? blocking_provider(*store, cache_bytes) : nullptr, nullptr) {
+}
+
+TerrainModel::TerrainModel(const tiles::Store& store, const MeshTopology& mesh,
+                           TileProvider& provider)
+    : TerrainModel(&store, mesh, nullptr, &provider) {}
+
+TerrainModel::TerrainModel(const tiles::Store* store, const MeshTopology& mesh,
+                           std::unique_ptr<TileProvider> owned, TileProvider* provider)
     : store_(store),
       mesh_(mesh),
-      tiles_(cache_bytes, [](const tiles::Raster& r) { return r.byte_size(); }) {
+      owned_provider_(std::move(owned)),
+      provider_(provider ? provider : owned_provider_.get()) {
+  if (!provider_) {  // the bare ellipsoid: no tiles at all
+    owned_provider_ = std::make_unique<NoTiles>();
+    provider_ = owned_provider_.get();
+  }
   if (store_) {
     data_max_ = store_->manifest().max_level;
     width_ = store_->grid().width();
@@ -95,19 +118,37 @@ DataWindow TerrainModel::parent_window(const geo::TileKey& key) const {
   return w;
 }
 
+void TerrainModel::begin_frame() {
+  pinned_.clear();
+  // Per-quad bounds are recomputed from the index when dropped; dropping them
+  // all at once keeps a long flight's memory flat.
+  if (quads_.size() > kMaxCachedQuads) quads_.clear();
+  if (subtree_.size() > kMaxCachedQuads) subtree_.clear();
+  provider_->begin_frame();
+}
+
+void TerrainModel::end_frame() {
+  provider_->end_frame();
+}
+
+bool TerrainModel::available(const geo::TileKey& key) {
+  if (provider_->blocking() || !store_ || !store_->has_tile(key) || pinned_.contains(key)) {
+    return true;
+  }
+  auto tile = provider_->get(key);
+  if (!tile || !*tile) return false;
+  pinned_.emplace(key, std::move(*tile));
+  return true;
+}
+
 Result<TerrainModel::TilePtr> TerrainModel::tile(const geo::TileKey& key) {
   if (!store_ || !store_->has_tile(key)) return TilePtr{};
-  if (auto hit = tiles_.get(key)) return hit;
-  tiles::Tile t = RELIEF_TRY(store_->read_tile(key));
-  if (t.raster.type() != tiles::SampleType::Float32) {
-    return fail(store_->root().string() + ": not an elevation store (imagery tiles)");
-  }
-  for (float& v : t.raster.f32()) {
-    if (std::isnan(v)) v = 0;
-  }
-  auto shared = std::make_shared<const tiles::Raster>(std::move(t.raster));
-  tiles_.put(key, shared);
-  return TilePtr(shared);
+  if (auto it = pinned_.find(key); it != pinned_.end()) return it->second;
+  TilePtr t = RELIEF_TRY(provider_->get(key));
+  // Misuse: non-blocking models draw only what available() pinned.
+  assert(t && "tile() of a tile not found available() this frame");
+  if (!t) return fail(fmt::format("tile {} is not resident", key.to_string()));
+  return t;
 }
 
 float TerrainModel::bilinear(const tiles::Raster& r, int border, double x, double y) {

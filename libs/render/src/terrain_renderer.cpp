@@ -8,6 +8,7 @@
 
 #include "gl.h"
 #include "shaders.h"
+#include "texture_cache.h"
 
 namespace relief::render {
 namespace {
@@ -66,11 +67,9 @@ GLuint make_texture(GLenum internal_format, int w, int h, GLenum format, GLenum 
 
 class GlTerrainRenderer final : public TerrainRenderer {
  public:
-  GlTerrainRenderer(lod::TerrainModel& elevation, const tiles::Store* imagery)
-      : elevation_(elevation), imagery_(imagery) {}
+  GlTerrainRenderer(lod::TerrainModel& elevation, const tiles::Store* imagery, uint64_t gpu_budget)
+      : elevation_(elevation), imagery_(imagery), textures_(gpu_budget) {}
   ~GlTerrainRenderer() override {
-    for (auto& [k, t] : height_textures_) glDeleteTextures(1, &t);
-    for (auto& [k, t] : imagery_textures_) glDeleteTextures(1, &t);
     glDeleteTextures(1, &zero_texture_);
     glDeleteBuffers(1, &vertex_buffer_);
     glDeleteBuffers(1, &index_buffer_);
@@ -111,6 +110,8 @@ class GlTerrainRenderer final : public TerrainRenderer {
                           RenderTarget& target, const RenderOptions& o) override {
     const auto start = Clock::now();
     FrameStats stats;
+    textures_.begin_frame();
+    const uint64_t uploads_before = textures_.uploads(), evicted_before = textures_.evicted();
     const lod::MeshTopology& mesh = elevation_.mesh();
     const size_t per_quad = mesh.vertices().size();
     // Vertices go to the GPU in batches of whole quads, at most kBatchVertices
@@ -142,6 +143,11 @@ class GlTerrainRenderer final : public TerrainRenderer {
       textures.push_back(t);
     }
     stats.prepare_seconds = std::chrono::duration<double>(Clock::now() - start).count();
+    stats.gpu_textures = static_cast<uint32_t>(textures_.count());
+    stats.gpu_bytes = textures_.used_bytes();
+    stats.gpu_budget = textures_.budget_bytes();
+    stats.uploads = static_cast<uint32_t>(textures_.uploads() - uploads_before);
+    stats.gpu_evicted = static_cast<uint32_t>(textures_.evicted() - evicted_before);
 
     const auto gpu_start = Clock::now();
     target.bind();
@@ -250,12 +256,12 @@ class GlTerrainRenderer final : public TerrainRenderer {
 
   Result<GLuint> height_texture(const std::optional<TileKey>& key) {
     if (!key) return zero_texture_;
-    if (auto it = height_textures_.find(*key); it != height_textures_.end()) return it->second;
+    if (auto t = textures_.find({*key, false})) return *t;
     const lod::TerrainModel::TilePtr tile = RELIEF_TRY(elevation_.tile(*key));
     if (!tile) return zero_texture_;
     const GLuint t =
         make_texture(GL_R32F, tile->width(), tile->height(), GL_RED, GL_FLOAT, tile->f32().data());
-    height_textures_[*key] = t;
+    textures_.insert({*key, false}, t, tile->byte_size());
     return t;
   }
 
@@ -276,11 +282,11 @@ class GlTerrainRenderer final : public TerrainRenderer {
 
   Result<GLuint> imagery_texture(const std::optional<TileKey>& key) {
     if (!key || !imagery_) return GLuint{0};
-    if (auto it = imagery_textures_.find(*key); it != imagery_textures_.end()) return it->second;
+    if (auto t = textures_.find({*key, true})) return *t;
     const tiles::Tile tile = RELIEF_TRY(imagery_->read_tile(*key));
     const GLuint t = make_texture(GL_RGBA8, tile.raster.width(), tile.raster.height(), GL_RGBA,
                                   GL_UNSIGNED_BYTE, tile.raster.u8().data());
-    imagery_textures_[*key] = t;
+    textures_.insert({*key, true}, t, tile.raster.byte_size());
     return t;
   }
 
@@ -290,17 +296,18 @@ class GlTerrainRenderer final : public TerrainRenderer {
   size_t vertex_capacity_ = 0;
   std::vector<Vertex> staging_;
   std::unordered_map<std::string, GLint> locations_;
-  std::unordered_map<TileKey, GLuint, geo::TileKeyHash> height_textures_, imagery_textures_;
+  TextureCache textures_;
 };
 
 }  // namespace
 
 Result<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(lod::TerrainModel& elevation,
-                                                                 const tiles::Store* imagery) {
+                                                                 const tiles::Store* imagery,
+                                                                 uint64_t gpu_budget) {
   if (imagery && imagery->manifest().sample_type != tiles::SampleType::UInt8) {
     return fail(imagery->root().string() + ": --imagery needs an imagery store (RGBA tiles)");
   }
-  auto r = std::make_unique<GlTerrainRenderer>(elevation, imagery);
+  auto r = std::make_unique<GlTerrainRenderer>(elevation, imagery, gpu_budget);
   RELIEF_CHECK(r->init());
   return std::unique_ptr<TerrainRenderer>(std::move(r));
 }

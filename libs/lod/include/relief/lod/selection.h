@@ -52,6 +52,9 @@ struct SelectionStats {
   uint32_t culled = 0;
   double seconds = 0;
   double max_error_pixels = 0;
+  // Interactive frames: quads drawn coarser than wanted because the data of
+  // their children is not resident yet (it was requested).
+  uint32_t waiting = 0;
 };
 
 struct Selection {

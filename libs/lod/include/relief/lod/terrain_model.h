@@ -11,9 +11,9 @@
 #include <optional>
 #include <unordered_map>
 
-#include "relief/base/lru_cache.h"
 #include "relief/base/result.h"
 #include "relief/lod/mesh_topology.h"
+#include "relief/lod/tile_provider.h"
 #include "relief/lod/vec.h"
 #include "relief/tiles/store.h"
 
@@ -39,9 +39,12 @@ struct Box {
 // Used by one thread at a time (the render thread): its caches are not locked.
 class TerrainModel {
  public:
-  // `store` may be null (the bare ellipsoid). Decoded tiles are cached within
-  // `cache_bytes`.
+  // `store` may be null (the bare ellipsoid). Tiles are read when needed and
+  // decoded tiles cached within `cache_bytes` (complete frames).
   TerrainModel(const tiles::Store* store, const MeshTopology& mesh, uint64_t cache_bytes);
+  // Tiles come from `provider` (which must outlive the model); with a
+  // non-blocking one, selection draws only what is resident (interactive frames).
+  TerrainModel(const tiles::Store& store, const MeshTopology& mesh, TileProvider& provider);
 
   const MeshTopology& mesh() const { return mesh_; }
   int data_max_level() const { return data_max_; }
@@ -57,8 +60,23 @@ class TerrainModel {
   // coarser quad: the parent's tile (or, beyond the store, the same tile).
   DataWindow parent_window(const geo::TileKey& key) const;
 
-  // Decoded bordered tile with nodata as 0, or nullptr when the store has none.
-  using TilePtr = std::shared_ptr<const tiles::Raster>;
+  // Frames: between begin_frame() and the next one, every tile found
+  // available() stays pinned (resident), so selection and drawing see the
+  // same data. begin_frame() also drops per-quad caches above their budget.
+  void begin_frame();
+  void end_frame();
+  // Whether tiles load on demand (complete frames) or only resident ones may
+  // be used (interactive frames).
+  bool blocking() const { return provider_->blocking(); }
+  // Whether the data tile `key` can be used now without waiting (always for
+  // blocking providers and for tiles the store does not have).
+  bool available(const geo::TileKey& key);
+  // Ask for a tile that was not available, with its view priority.
+  void request(const geo::TileKey& key, double priority) { provider_->request(key, priority); }
+
+  // Decoded bordered tile with nodata as 0, or nullptr when the store has
+  // none. Non-blocking providers: only for tiles found available() this frame.
+  using TilePtr = lod::TilePtr;
   Result<TilePtr> tile(const geo::TileKey& key);
 
   // Everything selection asks about a quad, cached per quad: the heights of
@@ -78,6 +96,10 @@ class TerrainModel {
   static float bilinear(const tiles::Raster& bordered, int border, double x, double y);
 
  private:
+  // Per-quad bounds kept between frames (~200 bytes each).
+  static constexpr size_t kMaxCachedQuads = 200000;
+  TerrainModel(const tiles::Store* store, const MeshTopology& mesh,
+               std::unique_ptr<TileProvider> owned, TileProvider* provider);
   Result<HeightRange> height_range(const geo::TileKey& key);
   // Upper bound, in metres, of |mesh - finest data| over the quad, including
   // the chord error of flat triangles on the curved ellipsoid.
@@ -88,7 +110,9 @@ class TerrainModel {
   const tiles::Store* store_;
   const MeshTopology& mesh_;
   int data_max_ = 0, max_level_ = 0, width_ = 512, height_ = 256, border_ = 0;
-  LruCache<geo::TileKey, tiles::Raster, geo::TileKeyHash> tiles_;
+  std::unique_ptr<TileProvider> owned_provider_;
+  TileProvider* provider_;
+  std::unordered_map<geo::TileKey, TilePtr, geo::TileKeyHash> pinned_;  // this frame's
   std::unordered_map<geo::TileKey, HeightRange, geo::TileKeyHash> subtree_;
   std::unordered_map<geo::TileKey, QuadInfo, geo::TileKeyHash> quads_;
 };

@@ -26,13 +26,18 @@ struct FrameStats {
   uint64_t triangles = 0;
   double prepare_seconds = 0;  // CPU: vertices and textures
   double gpu_seconds = 0;      // draw calls to glFinish
+  // The GPU cache (L3) after the frame.
+  uint32_t gpu_textures = 0, uploads = 0, gpu_evicted = 0;
+  uint64_t gpu_bytes = 0, gpu_budget = 0;
 };
 
 class TerrainRenderer {
  public:
-  // `imagery` may be null. Both must outlive the renderer.
+  // `imagery` may be null. Both must outlive the renderer. Tile textures are
+  // kept within `gpu_budget` bytes, except those the current frame draws.
   static Result<std::unique_ptr<TerrainRenderer>> create(lod::TerrainModel& elevation,
-                                                         const tiles::Store* imagery);
+                                                         const tiles::Store* imagery,
+                                                         uint64_t gpu_budget = uint64_t{1} << 30);
   virtual ~TerrainRenderer() = default;
   virtual Result<FrameStats> draw(const lod::View& view, const lod::Selection& selection,
                                   RenderTarget& target, const RenderOptions& options) = 0;

@@ -1,0 +1,113 @@
+#include "render_setup.h"
+
+#include <cstdio>
+
+#include <fmt/format.h>
+
+#include "relief/base/file_io.h"
+#include "relief/base/units.h"
+#include "relief/render/terrain_renderer.h"
+#include "relief/tiles/codec.h"
+
+namespace relief::cli {
+
+namespace {
+
+Result<tiles::Store> open_kind(const std::string& path, tiles::DatasetKind kind, const char* role,
+                               const StoreAccess& access = {}) {
+  tiles::Store s = RELIEF_TRY(open_store(path, access));
+  if (s.manifest().kind != kind) {
+    return fail(fmt::format("{}: holds {} data; {} must be an {} store", path,
+                            tiles::to_string(s.manifest().kind), role, tiles::to_string(kind)));
+  }
+  return s;
+}
+
+Result<uint64_t> byte_option(const Args& args, const char* name, uint64_t fallback) {
+  auto text = args.get(name);
+  if (!text) return fallback;
+  auto bytes = parse_byte_size(*text);
+  if (!bytes) return fail(fmt::format("{}: {}", name, bytes.error().message));
+  return *bytes;
+}
+
+}  // namespace
+
+Result<RenderSetup> parse_render_setup(const Args& args) {
+  if (args.positional().size() != 1) return fail("render: expected exactly one STORE");
+  RenderSetup s;
+  if (auto size = args.get("--size")) {
+    char x = 0, end = 0;
+    if (std::sscanf(size->c_str(), "%d%c%d%c", &s.width, &x, &s.height, &end) != 3 || x != 'x' ||
+        s.width < 1 || s.height < 1 || s.width > 16384 || s.height > 16384) {
+      return fail("--size: '" + *size + "' is not WxH between 1x1 and 16384x16384");
+    }
+  }
+  for (auto [name, target, lo, hi] : {std::tuple{"--fov", &s.fov, 1.0, 170.0},
+                                      std::tuple{"--pixel-error", &s.pixel_error, 0.05, 1000.0},
+                                      std::tuple{"--exaggeration", &s.exaggeration, 0.0, 100.0}}) {
+    auto v = RELIEF_TRY(args.get_double(name));
+    if (v) {
+      if (!(*v >= lo && *v <= hi))
+        return fail(fmt::format("{}: must be in [{}, {}]", name, lo, hi));
+      *target = *v;
+    }
+  }
+  if (auto level = RELIEF_TRY(args.get_int("--mesh-level", 0, 8))) s.mesh_level = *level;
+  s.full_resolution = args.has("--full-resolution");
+  s.sky = render::RenderOptions{}.sky;
+  if (auto text = args.get("--sky")) {
+    auto c = RELIEF_TRY(parse_numbers("--sky", *text, 3));
+    for (int i = 0; i < 3; ++i) s.sky[i] = static_cast<float>(std::clamp(c[i], 0.0, 255.0) / 255);
+  }
+  s.gpu_budget = RELIEF_TRY(byte_option(args, "--gpu-budget", s.gpu_budget));
+
+  StoreAccess access;
+  access.cache_bytes = RELIEF_TRY(byte_option(args, "--cache-size", access.cache_bytes));
+  access.cache_dir = args.get("--cache").value_or("");
+  if (auto ms = RELIEF_TRY(args.get_double("--simulate-latency"))) {
+    if (!(*ms >= 0 && *ms <= 60000)) return fail("--simulate-latency: must be in [0, 60000] ms");
+    access.link.latency = std::chrono::microseconds(static_cast<int64_t>(*ms * 1000));
+  }
+  if (auto mbit = RELIEF_TRY(args.get_double("--simulate-bandwidth"))) {
+    if (!(*mbit > 0)) return fail("--simulate-bandwidth: must be > 0 Mbit/s");
+    access.link.bits_per_second = *mbit * 1e6;
+  }
+  s.store =
+      RELIEF_TRY(open_kind(args.positional()[0], tiles::DatasetKind::Elevation, "STORE", access));
+  if (auto path = args.get("--imagery")) {
+    s.imagery = RELIEF_TRY(open_kind(*path, tiles::DatasetKind::Imagery, "--imagery"));
+  }
+  return s;
+}
+
+lod::SelectionOptions selection_options(const RenderSetup& setup) {
+  lod::SelectionOptions so;
+  so.pixel_error = setup.pixel_error;
+  so.full_resolution = setup.full_resolution;
+  if (setup.imagery) so.texture_max_level = setup.imagery->manifest().max_level;
+  return so;
+}
+
+Result<lod::Camera> parse_camera(const Args& args, const RenderSetup& s) {
+  if (auto c = args.get("--camera")) {
+    auto v = RELIEF_TRY(parse_numbers("--camera", *c, 6));
+    return lod::Camera{v[0], v[1], v[2], v[3], v[4], v[5], s.fov, s.width, s.height};
+  }
+  auto v = RELIEF_TRY(parse_numbers("--look-at", *args.get("--look-at"), 6));
+  if (!(v[3] > 0)) return fail("--look-at: the range must be > 0");
+  return lod::look_at(v[0], v[1], v[2], v[3], v[4], v[5], s.fov, s.width, s.height);
+}
+
+Status write_png(const std::string& path, std::span<const uint8_t> rgba, int width, int height) {
+  tiles::Raster image(tiles::SampleType::UInt8, 4, width, height);
+  std::copy(rgba.begin(), rgba.end(), image.u8().begin());
+  auto png = RELIEF_TRY(tiles::encode(image, tiles::CodecOptions{tiles::Codec::Png}));
+  return write_file_atomic(path, png);
+}
+
+Status write_json(const std::string& path, const std::string& text) {
+  return write_file_atomic(path, std::as_bytes(std::span(text.data(), text.size())));
+}
+
+}  // namespace relief::cli

@@ -1,0 +1,40 @@
+#pragma once
+// What `relief render` needs for a still and for a path: the stores and the
+// options shared by both, parsed once with one-line errors.
+#include <array>
+#include <optional>
+#include <string>
+
+#include "args.h"
+#include "open_store.h"
+#include "relief/lod/selection.h"
+#include "relief/tiles/store.h"
+
+namespace relief::cli {
+
+struct RenderSetup {
+  tiles::Store store;
+  std::optional<tiles::Store> imagery;
+  int width = 1024, height = 768;
+  double fov = 60, pixel_error = 1, exaggeration = 1;
+  int mesh_level = 4;
+  bool full_resolution = false;
+  std::array<float, 3> sky{};
+  uint64_t gpu_budget = uint64_t{1} << 30;
+};
+
+Result<RenderSetup> parse_render_setup(const Args& args);
+
+// Selection options of a setup (imagery sets the texture level).
+lod::SelectionOptions selection_options(const RenderSetup& setup);
+
+// A camera from --camera or --look-at values, with the setup's viewport.
+Result<lod::Camera> parse_camera(const Args& args, const RenderSetup& setup);
+
+// Writes RGBA pixels as a PNG, atomically.
+Status write_png(const std::string& path, std::span<const uint8_t> rgba, int width, int height);
+
+// Writes JSON text atomically.
+Status write_json(const std::string& path, const std::string& text);
+
+}  // namespace relief::cli

@@ -1,0 +1,47 @@
+#pragma once
+// Where a TerrainModel gets decoded elevation tiles (heights, nodata as 0).
+//
+// Complete frames use a provider that waits for every tile. Interactive
+// frames use one that never waits (libs/stream): a tile that is not resident
+// is requested with the view priority of the quad that wants it, and the
+// selection keeps drawing that quad's resident ancestor meanwhile.
+#include <memory>
+
+#include "relief/base/result.h"
+#include "relief/geo/tile_key.h"
+#include "relief/tiles/raster.h"
+
+namespace relief::tiles {
+class Store;
+}
+
+namespace relief::lod {
+
+using TilePtr = std::shared_ptr<const tiles::Raster>;
+
+class TileProvider {
+ public:
+  virtual ~TileProvider() = default;
+  // Whether get() loads a tile that is not resident (and waits for it).
+  virtual bool blocking() const = 0;
+  // The tile, or (non-blocking providers) nullptr when it is not resident yet.
+  // The key is a tile of the store. The returned pointer pins the tile: it
+  // stays resident while the caller holds it.
+  virtual Result<TilePtr> get(const geo::TileKey& key) = 0;
+  // The view wants this non-resident tile; higher priorities load first. A
+  // frame's requests replace the previous frame's (stale ones are cancelled).
+  virtual void request(const geo::TileKey& /*key*/, double /*priority*/) {}
+  // The bracket of one frame's requests.
+  virtual void begin_frame() {}
+  virtual void end_frame() {}
+};
+
+// Reads each tile from the store when asked, keeping decoded tiles within a
+// byte budget (least recently used first out).
+std::unique_ptr<TileProvider> blocking_provider(const tiles::Store& store, uint64_t cache_bytes);
+
+// A store tile as heights: Float32 samples with NaN (nodata) replaced by 0;
+// an error naming the store for anything else.
+Result<TilePtr> decode_heights(const tiles::Store& store, const geo::TileKey& key);
+
+}  // namespace relief::lod

@@ -1,0 +1,86 @@
+#pragma once
+// The memory cache (L2) of decoded elevation tiles and the asynchronous
+// loader that fills it, as a non-blocking lod::TileProvider.
+//
+// Threads: the render thread calls everything here; worker threads (as many
+// as loads may be in flight) read and decode tiles. Event listeners run on
+// the render thread, in begin_frame().
+//
+// Priority: each frame's requests (from selection, with view priorities)
+// replace the previous frame's queue; queued tiles no frame wants any more are
+// cancelled. Ancestors come first by construction: selection requests a
+// quad's children only once the quad's own data is resident. Prefetch
+// requests (the view predicted along the camera's motion) rank after every
+// request of the current view.
+//
+// Budget: resident bytes never exceed the budget. Tiles a caller holds (the
+// TilePtr is the pin) and the level-0 tiles (loaded at creation and kept) are
+// never evicted; a loaded tile that does not fit beside the pinned ones is
+// dropped again.
+#include <functional>
+#include <memory>
+#include <vector>
+
+#include "relief/base/result.h"
+#include "relief/lod/tile_provider.h"
+#include "relief/stream/tile_lifecycle.h"
+
+namespace relief::tiles {
+class Store;
+}
+
+namespace relief::stream {
+
+struct LoaderOptions {
+  int max_in_flight = 8;                         // worker threads
+  uint64_t memory_budget = uint64_t{256} << 20;  // resident decoded bytes
+  double retry_failed_after = 2.0;               // seconds before a failed tile may load again
+};
+
+struct LevelUse {
+  uint32_t tiles = 0;
+  uint64_t bytes = 0;
+};
+
+struct LoaderStats {
+  std::vector<LevelUse> resident_per_level;
+  uint32_t resident_tiles = 0;
+  uint64_t resident_bytes = 0, memory_budget = 0, pinned_bytes = 0;
+  uint32_t queued = 0, in_flight = 0;
+  uint64_t hits = 0, misses = 0;  // get() of resident / not resident tiles
+  uint64_t requested = 0, loaded = 0, failed = 0, evicted = 0, cancelled = 0;
+  uint64_t bytes_fetched = 0;                  // tile file bytes read from the source
+  uint64_t prefetched = 0, prefetch_used = 0;  // loaded by prefetch; of those, later drawn
+};
+
+class TileLoader final : public lod::TileProvider {
+ public:
+  // Loads and keeps the store's level-0 tiles (a blocking read, once).
+  static Result<std::unique_ptr<TileLoader>> create(const tiles::Store& store,
+                                                    const LoaderOptions& options);
+  ~TileLoader() override;
+
+  bool blocking() const override { return false; }
+  Result<lod::TilePtr> get(const geo::TileKey& key) override;
+  void request(const geo::TileKey& key, double priority) override;
+  void begin_frame() override;
+  void end_frame() override;
+
+  // While set, requests are prefetch: ranked after the current view's.
+  void set_prefetch(bool on) { prefetching_ = on; }
+
+  // Called on the render thread (in begin_frame) for every transition.
+  void subscribe(std::function<void(const TileEvent&)> listener);
+  LoaderStats stats() const;
+  TileState state(const geo::TileKey& key) const;
+  // Nothing queued or loading.
+  bool idle() const;
+
+ private:
+  struct Impl;
+  explicit TileLoader(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+  bool prefetching_ = false;
+};
+
+}  // namespace relief::stream

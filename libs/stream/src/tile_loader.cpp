@@ -1,0 +1,313 @@
+#include "relief/stream/tile_loader.h"
+
+#include <algorithm>
+#include <cassert>
+#include <chrono>
+#include <condition_variable>
+#include <list>
+#include <mutex>
+#include <thread>
+#include <unordered_map>
+
+#include "relief/tiles/store.h"
+
+namespace relief::stream {
+
+namespace {
+
+using geo::TileKey;
+using Clock = std::chrono::steady_clock;
+
+// Prefetch priorities are scaled into a band below every current request.
+constexpr double kPrefetchScale = 1e-12;
+
+struct Entry {
+  TileState state = TileState::Absent;
+  lod::TilePtr tile;
+  uint64_t bytes = 0;
+  std::list<TileKey>::iterator lru;  // Resident only
+  bool permanent = false;            // level 0
+  bool prefetch = false;             // loaded for a predicted view, not drawn yet
+  Clock::time_point failed_at;
+};
+
+struct Request {
+  TileKey key;
+  double priority;
+  bool prefetch;
+};
+
+}  // namespace
+
+const char* to_string(TileState s) {
+  switch (s) {
+    case TileState::Absent:
+      return "absent";
+    case TileState::Queued:
+      return "queued";
+    case TileState::Loading:
+      return "loading";
+    case TileState::Resident:
+      return "resident";
+    case TileState::Failed:
+      return "failed";
+  }
+  return "?";
+}
+
+const char* to_string(TileEventKind k) {
+  switch (k) {
+    case TileEventKind::Requested:
+      return "requested";
+    case TileEventKind::Cancelled:
+      return "cancelled";
+    case TileEventKind::Started:
+      return "started";
+    case TileEventKind::Loaded:
+      return "loaded";
+    case TileEventKind::Failed:
+      return "failed";
+    case TileEventKind::Evicted:
+      return "evicted";
+  }
+  return "?";
+}
+
+struct TileLoader::Impl {
+  const tiles::Store& store;
+  LoaderOptions options;
+  mutable std::mutex mutex;
+  std::condition_variable wake;
+  bool stopping = false;
+  std::unordered_map<TileKey, Entry, geo::TileKeyHash> entries;
+  std::list<TileKey> lru;      // resident, most recent first
+  std::vector<Request> queue;  // ascending priority: workers take the back
+  std::vector<TileEvent> events;
+  LoaderStats counters;
+  uint64_t resident_bytes = 0;
+  uint32_t in_flight = 0;
+  // Render thread only.
+  std::unordered_map<TileKey, Request, geo::TileKeyHash> frame_requests;
+  std::vector<std::function<void(const TileEvent&)>> listeners;
+  std::vector<std::thread> workers;
+
+  Impl(const tiles::Store& s, const LoaderOptions& o) : store(s), options(o) {}
+
+  // Every state change goes through here (mutex held).
+  void move(const TileKey& key, Entry& e, TileState to, TileEvent event) {
+    assert(allowed(e.state, to));
+    e.state = to;
+    event.key = key;
+    events.push_back(std::move(event));
+  }
+
+  void erase(const TileKey& key) { entries.erase(key); }
+
+  bool pinned(const Entry& e) const { return e.permanent || e.tile.use_count() > 1; }
+
+  // Evicts unpinned tiles other than `keep`, least recently used first,
+  // until within budget.
+  void evict_to_budget(const TileKey& keep) {
+    for (auto it = lru.end(); resident_bytes > options.memory_budget && it != lru.begin();) {
+      --it;
+      Entry& e = entries.at(*it);
+      if (pinned(e) || *it == keep) continue;
+      const TileKey key = *it;
+      it = lru.erase(it);
+      resident_bytes -= e.bytes;
+      ++counters.evicted;
+      move(key, e, TileState::Absent, {TileEventKind::Evicted, key, e.bytes, e.prefetch, {}});
+      erase(key);
+    }
+  }
+
+  void make_resident(const TileKey& key, Entry& e, lod::TilePtr tile) {
+    e.bytes = tile->byte_size();
+    e.tile = std::move(tile);
+    lru.push_front(key);
+    e.lru = lru.begin();
+    resident_bytes += e.bytes;
+  }
+
+  void work() {
+    std::unique_lock lock(mutex);
+    for (;;) {
+      wake.wait(lock, [&] { return stopping || !queue.empty(); });
+      if (stopping) return;
+      const Request r = queue.back();
+      queue.pop_back();
+      Entry& e = entries.at(r.key);
+      move(r.key, e, TileState::Loading, {TileEventKind::Started, r.key, 0, r.prefetch, {}});
+      ++in_flight;
+      lock.unlock();
+      Result<lod::TilePtr> tile = lod::decode_heights(store, r.key);
+      const tiles::IndexEntry* ie = store.index(r.key.level).find(r.key);
+      lock.lock();
+      --in_flight;
+      Entry& done = entries.at(r.key);  // Loading entries are never erased by others
+      if (!tile) {
+        ++counters.failed;
+        done.failed_at = Clock::now();
+        move(r.key, done, TileState::Failed,
+             {TileEventKind::Failed, r.key, 0, r.prefetch, tile.error().message});
+        continue;
+      }
+      counters.bytes_fetched += ie ? ie->file_bytes : 0;
+      ++counters.loaded;
+      if (r.prefetch) ++counters.prefetched;
+      done.prefetch = r.prefetch;
+      move(r.key, done, TileState::Resident,
+           {TileEventKind::Loaded, r.key, (*tile)->byte_size(), r.prefetch, {}});
+      make_resident(r.key, done, std::move(*tile));
+      evict_to_budget(r.key);
+      if (resident_bytes > options.memory_budget) {
+        // Everything else is pinned: this one does not fit.
+        lru.erase(done.lru);
+        resident_bytes -= done.bytes;
+        ++counters.evicted;
+        move(r.key, done, TileState::Absent,
+             {TileEventKind::Evicted, r.key, done.bytes, r.prefetch, {}});
+        erase(r.key);
+      }
+    }
+  }
+};
+
+TileLoader::TileLoader(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+
+TileLoader::~TileLoader() {
+  {
+    std::lock_guard lock(impl_->mutex);
+    impl_->stopping = true;
+  }
+  impl_->wake.notify_all();
+  for (auto& t : impl_->workers) t.join();
+}
+
+Result<std::unique_ptr<TileLoader>> TileLoader::create(const tiles::Store& store,
+                                                       const LoaderOptions& options) {
+  if (options.max_in_flight < 1) return fail("loader: at least one load must be allowed in flight");
+  auto impl = std::make_unique<Impl>(store, options);
+  for (const tiles::IndexEntry& ie : store.index(0).entries()) {
+    lod::TilePtr tile = RELIEF_TRY(lod::decode_heights(store, ie.key));
+    Entry& e = impl->entries[ie.key];
+    e.state = TileState::Resident;
+    e.permanent = true;
+    impl->make_resident(ie.key, e, std::move(tile));
+    impl->counters.bytes_fetched += ie.file_bytes;
+    ++impl->counters.loaded;
+  }
+  for (int i = 0; i < options.max_in_flight; ++i) {
+    impl->workers.emplace_back([p = impl.get()] { p->work(); });
+  }
+  return std::unique_ptr<TileLoader>(new TileLoader(std::move(impl)));
+}
+
+Result<lod::TilePtr> TileLoader::get(const TileKey& key) {
+  std::lock_guard lock(impl_->mutex);
+  auto it = impl_->entries.find(key);
+  if (it == impl_->entries.end() || it->second.state != TileState::Resident) {
+    ++impl_->counters.misses;
+    return lod::TilePtr{};
+  }
+  ++impl_->counters.hits;
+  Entry& e = it->second;
+  impl_->lru.splice(impl_->lru.begin(), impl_->lru, e.lru);
+  if (e.prefetch && !prefetching_) {
+    e.prefetch = false;
+    ++impl_->counters.prefetch_used;
+  }
+  return e.tile;
+}
+
+void TileLoader::request(const TileKey& key, double priority) {
+  const double p = prefetching_ ? priority * kPrefetchScale : priority;
+  auto [it, added] = impl_->frame_requests.try_emplace(key, Request{key, p, prefetching_});
+  if (!added) {
+    it->second.priority = std::max(it->second.priority, p);
+    it->second.prefetch = it->second.prefetch && prefetching_;
+  }
+}
+
+void TileLoader::begin_frame() {
+  impl_->frame_requests.clear();
+  std::vector<TileEvent> events;
+  {
+    std::lock_guard lock(impl_->mutex);
+    events.swap(impl_->events);
+  }
+  for (const TileEvent& e : events) {
+    for (const auto& listener : impl_->listeners) listener(e);
+  }
+}
+
+void TileLoader::end_frame() {
+  Impl& m = *impl_;
+  {
+    std::lock_guard lock(m.mutex);
+    // Stale requests: queued, but no longer wanted.
+    for (const Request& r : m.queue) {
+      if (m.frame_requests.contains(r.key)) continue;
+      ++m.counters.cancelled;
+      m.move(r.key, m.entries.at(r.key), TileState::Absent,
+             {TileEventKind::Cancelled, r.key, 0, r.prefetch, {}});
+      m.erase(r.key);
+    }
+    m.queue.clear();
+    const auto now = Clock::now();
+    for (const auto& [key, r] : m.frame_requests) {
+      Entry& e = m.entries[key];
+      if (e.state == TileState::Failed &&
+          std::chrono::duration<double>(now - e.failed_at).count() >=
+              m.options.retry_failed_after) {
+        m.move(key, e, TileState::Absent, {TileEventKind::Evicted, key, 0, r.prefetch, {}});
+      }
+      if (e.state == TileState::Absent) {
+        ++m.counters.requested;
+        m.move(key, e, TileState::Queued, {TileEventKind::Requested, key, 0, r.prefetch, {}});
+      }
+      if (e.state == TileState::Queued) m.queue.push_back(r);
+    }
+    std::sort(m.queue.begin(), m.queue.end(), [](const Request& a, const Request& b) {
+      return a.priority != b.priority ? a.priority < b.priority : b.key < a.key;
+    });
+  }
+  m.wake.notify_all();
+}
+
+void TileLoader::subscribe(std::function<void(const TileEvent&)> listener) {
+  impl_->listeners.push_back(std::move(listener));
+}
+
+LoaderStats TileLoader::stats() const {
+  std::lock_guard lock(impl_->mutex);
+  LoaderStats s = impl_->counters;
+  s.memory_budget = impl_->options.memory_budget;
+  s.resident_bytes = impl_->resident_bytes;
+  s.queued = static_cast<uint32_t>(impl_->queue.size());
+  s.in_flight = impl_->in_flight;
+  for (const auto& [key, e] : impl_->entries) {
+    if (e.state != TileState::Resident) continue;
+    if (s.resident_per_level.size() <= static_cast<size_t>(key.level)) {
+      s.resident_per_level.resize(static_cast<size_t>(key.level) + 1);
+    }
+    ++s.resident_per_level[static_cast<size_t>(key.level)].tiles;
+    s.resident_per_level[static_cast<size_t>(key.level)].bytes += e.bytes;
+    ++s.resident_tiles;
+    if (impl_->pinned(e)) s.pinned_bytes += e.bytes;
+  }
+  return s;
+}
+
+TileState TileLoader::state(const TileKey& key) const {
+  std::lock_guard lock(impl_->mutex);
+  auto it = impl_->entries.find(key);
+  return it == impl_->entries.end() ? TileState::Absent : it->second.state;
+}
+
+bool TileLoader::idle() const {
+  std::lock_guard lock(impl_->mutex);
+  return impl_->queue.empty() && impl_->in_flight == 0;
+}
+
+}  // namespace relief::stream
