@@ -20,50 +20,12 @@
 
 #include "relief/base/file_io.h"
 #include "relief/serve/store_server.h"
+#include "servers.h"
 #include "test_support.h"
 
 namespace relief::testing {
 namespace {
 namespace fs = std::filesystem;
-
-int free_port() {
-  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  ::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a);
-  socklen_t len = sizeof a;
-  ::getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len);
-  ::close(fd);
-  return ntohs(a.sin_port);
-}
-
-int connect_to(int port) {
-  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_port = htons(static_cast<uint16_t>(port));
-  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  if (::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0) {
-    ::close(fd);
-    return -1;
-  }
-  timeval t{5, 0};
-  ::setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &t, sizeof t);
-  return fd;
-}
-
-void wait_for(int port) {
-  for (int i = 0; i < 200; ++i) {
-    const int fd = connect_to(port);
-    if (fd >= 0) {
-      ::close(fd);
-      return;
-    }
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  }
-  FAIL() << "nothing listens on port " << port;
-}
 
 struct Response {
   int status = 0;
@@ -228,28 +190,8 @@ TEST_F(ServeTest, ManyClientsAtOnce) {
 }
 
 TEST_F(ServeTest, NginxServesTheSameStoreIdentically) {
-  const fs::path prefix = scratch().path() / "nginx";
-  fs::create_directories(prefix / "logs");
   const int port = free_port();
-  std::ofstream(prefix / "nginx.conf")
-      << "daemon off; master_process off; worker_processes 1;\n"
-      << "pid " << (prefix / "nginx.pid").string() << ";\n"
-      << "error_log " << (prefix / "logs/error.log").string() << ";\n"
-      << "events { worker_connections 64; }\n"
-      << "http { access_log off; client_body_temp_path " << prefix.string() << "/body;\n"
-      << "  proxy_temp_path " << prefix.string() << "/proxy; fastcgi_temp_path " << prefix.string()
-      << "/fastcgi;\n  uwsgi_temp_path " << prefix.string() << "/uwsgi; scgi_temp_path "
-      << prefix.string() << "/scgi;\n"
-      << "  types { application/json json; } default_type application/octet-stream;\n"
-      << "  server { listen 127.0.0.1:" << port << "; root " << store_.string() << "; } }\n";
-  const pid_t nginx = ::fork();
-  if (nginx == 0) {
-    ::freopen("/dev/null", "w", stderr);
-    ::execlp("nginx", "nginx", "-p", prefix.c_str(), "-c", (prefix / "nginx.conf").c_str(),
-             nullptr);
-    ::_exit(127);
-  }
-  wait_for(port);
+  const int nginx = start_nginx(store_, scratch().path() / "nginx", port);
   for (const std::string& path : {std::string("/manifest.json"), std::string("/10/index.rli"),
                                   some_tile(), std::string("/10/fff.rtile")}) {
     SCOPED_TRACE(path);

@@ -153,6 +153,12 @@ class Selector {
   Result<bool> children_available(const TileKey& key) {
     if (terrain_.blocking()) return true;
     if (frozen_.contains(key)) return false;
+    if (const DataWindow own = terrain_.window(key); own.tile && !terrain_.available(*own.tile)) {
+      // A culled quad without its data: that loads first (ancestors first).
+      terrain_.request(*own.tile, 0);
+      ++waiting_;
+      return false;
+    }
     bool all = true;
     for (int c = 0; c < 4; ++c) {
       const TileKey child = key.child(c & 1, c >> 1);

@@ -1,0 +1,271 @@
+// `relief render --path`: interactive frames that never wait, drawn from
+// ancestors until the data arrives, converging to the complete frame; load
+// order; budgets along a long path; servers that die; bad input.
+#include <gtest/gtest.h>
+
+#include <signal.h>
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <numeric>
+#include <sstream>
+#include <thread>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "images.h"
+#include "relief/geo/tile_key.h"
+#include "relief/lod/camera.h"
+#include "servers.h"
+#include "test_support.h"
+
+namespace relief::testing {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+constexpr int kWidth = 200, kHeight = 150;
+// Oblique views that see only ground.
+constexpr const char* kGround = "[1.45, 42.55, 3600, 20, -50, 0]";
+constexpr const char* kGroundStill = "1.45,42.55,3600,20,-50,0";
+
+class StreamingRenderTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new ScratchDir("streaming_render");
+    ASSERT_EQ(run_relief({"build", data("srtm/N42E001.hgt.zip"), "--kind", "elevation", "-o",
+                          store().string(), "--tile-size", "128x64", "-q"})
+                  .exit_code,
+              0);
+  }
+  static void TearDownTestSuite() { delete dir_; }
+  static fs::path store() { return dir_->path() / "store"; }
+  static fs::path scratch(const std::string& name) { return dir_->path() / name; }
+
+  // Writes a path file and renders it; returns the statistics.
+  static json render_path(const std::string& name, const std::string& keyframes,
+                          std::vector<std::string> extra, const std::string& location = "") {
+    const fs::path path = scratch(name + ".json"), out = scratch(name);
+    std::ofstream(path) << "{\"fps\": 10, \"keyframes\": [" << keyframes << "]}";
+    std::vector<std::string> args = {"render",       location.empty() ? store().string() : location,
+                                     "--path",       path.string(),
+                                     "-o",           out.string(),
+                                     "--size",       fmt::format("{}x{}", kWidth, kHeight),
+                                     "--mesh-level", "3",
+                                     "--stats",      (out / "stats.json").string(),
+                                     "--events",     (out / "events.jsonl").string(),
+                                     "--sky",        "255,0,255"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    const RunResult r = run_relief(args);
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    std::ifstream in(out / "stats.json");
+    json stats = json::parse(in, nullptr, false);
+    EXPECT_FALSE(stats.is_discarded()) << name;
+    return stats;
+  }
+  static std::vector<json> events(const std::string& name) {
+    std::vector<json> out;
+    std::ifstream in(scratch(name) / "events.jsonl");
+    for (std::string line; std::getline(in, line);) out.push_back(json::parse(line));
+    return out;
+  }
+  static Image frame(const std::string& name, size_t i) {
+    return read_png(scratch(name) / fmt::format("frame_{:05d}.png", i), kWidth, kHeight);
+  }
+  static inline ScratchDir* dir_ = nullptr;
+};
+
+std::string still(const std::string& camera) {
+  return fmt::format("{{\"time\": 0, \"camera\": {}}}, {{\"time\": 0.5, \"camera\": {}}}", camera,
+                     camera);
+}
+
+TEST_F(StreamingRenderTest, InteractiveFramesDoNotWaitAndConvergeToTheCompleteFrame) {
+  const json s = render_path("interactive", still(kGround),
+                             {"--simulate-latency", "300", "--until-complete", "60"});
+  const json& frames = s["frames"];
+  ASSERT_GE(frames.size(), 3u);
+  EXPECT_FALSE(frames[0]["complete"].get<bool>());
+  EXPECT_TRUE(s["summary"]["complete"].get<bool>());
+  for (const json& f : frames) {
+    // A tile takes 300 ms to arrive; no frame waits for one.
+    EXPECT_LT(f["frame_ms"].get<double>(), 200) << f["frame"];
+  }
+  // Every frame, the first included (level-0 data only), covers the ground: no holes.
+  for (size_t i = 0; i < frames.size(); i += std::max<size_t>(1, frames.size() / 6)) {
+    EXPECT_EQ(count_colour(frame("interactive", i), 255, 0, 255), 0u) << i;
+  }
+  // The last frame is the complete still of the same view.
+  const fs::path ref = scratch("interactive-still.png");
+  const RunResult r = run_relief({"render", store().string(), "--camera", kGroundStill, "-o",
+                                  ref.string(), "--size", fmt::format("{}x{}", kWidth, kHeight),
+                                  "--mesh-level", "3", "--sky", "255,0,255"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Image want = read_png(ref, kWidth, kHeight);
+  const Image got = frame("interactive", frames.size() - 1);
+  size_t differ = 0;
+  for (size_t p = 0; p < want.rgba.size(); ++p) differ += std::abs(want.rgba[p] - got.rgba[p]) > 2;
+  EXPECT_EQ(differ, 0u);
+  // Complete mode waits: its first frame takes at least one round trip.
+  const json c =
+      render_path("complete", still(kGround), {"--simulate-latency", "300", "--mode", "complete"});
+  EXPECT_GE(c["frames"][0]["frame_ms"].get<double>(), 300);
+  EXPECT_TRUE(c["frames"][0]["complete"].get<bool>());
+}
+
+// Screen-space distance of a tile's centre from the centre of the view.
+double off_centre(const geo::TileKey& key, const lod::View& view) {
+  const geo::GeoBox b = key.bounds();
+  double sx = 0, sy = 0;
+  if (!view.project(lod::ecef((b.west + b.east) / 2, (b.south + b.north) / 2, 1000), sx, sy)) {
+    return 1e9;
+  }
+  return std::hypot(sx - view.width / 2.0, sy - view.height / 2.0);
+}
+
+TEST_F(StreamingRenderTest, AncestorsAndTheScreenCentreLoadFirst) {
+  render_path("order", still("[1.5, 42.3, 5000, 0, -30, 0]"),
+              {"--simulate-latency", "40", "--loads", "2", "--until-complete", "60"});
+  const auto ev = events("order");
+  std::map<std::string, size_t> started;
+  std::vector<geo::TileKey> order;
+  for (const json& e : ev) {
+    if (e["event"] != "started") continue;
+    started.emplace(e["tile"].get<std::string>(), started.size());
+    geo::TileKey k;
+    ASSERT_EQ(std::sscanf(e["tile"].get<std::string>().c_str(), "%d/%u/%u", &k.level, &k.x, &k.y),
+              3);
+    order.push_back(k);
+  }
+  ASSERT_GT(order.size(), 20u);
+  for (const auto& k : order) {
+    if (k.level <= 1) continue;
+    const auto parent = started.find(k.parent()->to_string());
+    ASSERT_NE(parent, started.end()) << k.to_string() << " loaded without its parent";
+    EXPECT_LT(parent->second, started.at(k.to_string())) << k.to_string();
+  }
+  // Among the finest tiles, the first quarter to load sits nearer the screen
+  // centre than the last quarter.
+  auto view = lod::make_view({1.5, 42.3, 5000, 0, -30, 0, 60, kWidth, kHeight});
+  ASSERT_TRUE(view);
+  int deepest = 0;
+  for (const auto& k : order) deepest = std::max(deepest, k.level);
+  std::vector<double> d;
+  for (const auto& k : order) {
+    if (k.level == deepest) d.push_back(off_centre(k, *view));
+  }
+  ASSERT_GE(d.size(), 8u);
+  const size_t q = d.size() / 4;
+  const double first = std::accumulate(d.begin(), d.begin() + q, 0.0) / q;
+  const double last = std::accumulate(d.end() - q, d.end(), 0.0) / q;
+  EXPECT_LT(first, last);
+}
+
+TEST_F(StreamingRenderTest, ASuddenTurnCancelsStaleRequests) {
+  const json s =
+      render_path("turn",
+                  "{\"time\": 0, \"camera\": [1.5, 42.5, 4000, 0, -25, 0]},"
+                  "{\"time\": 0.2, \"camera\": [1.5, 42.5, 4000, 180, -25, 0], \"cut\": true},"
+                  "{\"time\": 0.6, \"camera\": [1.5, 42.5, 4000, 180, -25, 0]}",
+                  {"--simulate-latency", "150", "--loads", "2", "--until-complete", "60"});
+  EXPECT_GT(s["summary"]["cancelled"].get<int>(), 0);
+  EXPECT_TRUE(s["summary"]["complete"].get<bool>());
+  ASSERT_EQ(s["summary"]["cuts"].size(), 1u);
+  EXPECT_FALSE(s["summary"]["cuts"][0]["complete_after_s"].is_null());
+}
+
+TEST_F(StreamingRenderTest, BudgetsHoldAlongALongPath) {
+  const uint64_t memory = 3 << 20, gpu = 6 << 20;
+  const json s = render_path("long",
+                             "{\"time\": 0, \"camera\": [1.05, 42.05, 3000, 45, -30, 0]},"
+                             "{\"time\": 3, \"camera\": [1.95, 42.95, 3000, 45, -30, 0]},"
+                             "{\"time\": 6, \"camera\": [1.05, 42.95, 3000, 270, -30, 0]},"
+                             "{\"time\": 9, \"camera\": [1.05, 42.05, 3000, 180, -30, 0]},"
+                             "{\"time\": 12, \"camera\": [1.95, 42.95, 3000, 45, -30, 0]}",
+                             {"--memory-budget", "3MiB", "--gpu-budget", "6MiB", "--no-frames"});
+  const json& frames = s["frames"];
+  ASSERT_EQ(frames.size(), 121u);
+  uint64_t evicted = 0, rss_early = 0, rss_max = 0;
+  for (size_t i = 0; i < frames.size(); ++i) {
+    const json& f = frames[i];
+    EXPECT_LE(f["memory"]["resident_bytes"].get<uint64_t>(), memory) << i;
+    EXPECT_LE(f["gpu"]["bytes"].get<uint64_t>(), gpu) << i;
+    evicted = f["memory"]["evicted"].get<uint64_t>();
+    // Allocators and driver settle during the first laps; then flat.
+    if (i == 60) rss_early = f["rss_bytes"].get<uint64_t>();
+    if (i >= 60) rss_max = std::max(rss_max, f["rss_bytes"].get<uint64_t>());
+  }
+  EXPECT_GT(evicted, 0u);  // the budget was tight enough to matter
+  EXPECT_LT(rss_max, rss_early + (32 << 20)) << "resident set grew along the path";
+}
+
+TEST_F(StreamingRenderTest, ServedStoresStreamAndAServerThatDiesIsSurvived) {
+  // nginx serving the store: the same final frame as the local store.
+  const int nginx_port = free_port();
+  const int nginx = start_nginx(store(), scratch("nginx-server"), nginx_port);
+  const json via_nginx = render_path("nginx", still(kGround), {"--until-complete", "60"},
+                                     fmt::format("http://127.0.0.1:{}/", nginx_port));
+  const json local = render_path("local", still(kGround), {"--until-complete", "60"});
+  ::kill(nginx, SIGTERM);
+  ::waitpid(nginx, nullptr, 0);
+  ASSERT_TRUE(via_nginx["summary"]["complete"].get<bool>());
+  EXPECT_EQ(frame("nginx", via_nginx["frames"].size() - 1).rgba,
+            frame("local", local["frames"].size() - 1).rgba);
+
+  // relief serve, killed while the camera flies on to new ground.
+  const int port = free_port();
+  const int server = spawn_relief({"serve", store().string(), "--port", std::to_string(port)});
+  wait_for(port);
+  std::thread killer([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(1200));
+    ::kill(server, SIGKILL);
+    ::waitpid(server, nullptr, 0);
+  });
+  const json s =
+      render_path("dying",
+                  "{\"time\": 0, \"camera\": [1.1, 42.1, 3000, 45, -50, 0]},"
+                  "{\"time\": 3, \"camera\": [1.9, 42.9, 3000, 45, -50, 0]}",
+                  {"--simulate-latency", "30"}, fmt::format("http://127.0.0.1:{}/", port));
+  killer.join();
+  EXPECT_EQ(s["frames"].size(), 31u);  // every frame drawn
+  EXPECT_GT(s["summary"]["failed"].get<int>(), 0);
+  bool reported = false;
+  for (const json& e : events("dying")) reported |= e["event"] == "failed" && !e["error"].empty();
+  EXPECT_TRUE(reported);
+  // Drawn from ancestors meanwhile: no holes in the last frame.
+  EXPECT_EQ(count_colour(frame("dying", 30), 255, 0, 255), 0u);
+}
+
+TEST_F(StreamingRenderTest, BadPathsAndOptionsAreOneLineErrors) {
+  const fs::path bad = scratch("bad.json"), out = scratch("bad");
+  auto run = [&](const std::string& text, std::vector<std::string> extra = {}) {
+    std::ofstream(bad) << text;
+    std::vector<std::string> args = {"render", store().string(), "--path", bad.string(),
+                                     "-o",     out.string()};
+    args.insert(args.end(), extra.begin(), extra.end());
+    return run_relief(args);
+  };
+  const std::string ok = "{\"keyframes\": [" + still(kGround) + "]}";
+  EXPECT_TRUE(is_one_line_error(run("{nope"), "bad.json: not a JSON object"));
+  EXPECT_TRUE(is_one_line_error(run("{\"keyframes\": []}"), "non-empty \"keyframes\""));
+  EXPECT_TRUE(
+      is_one_line_error(run("{\"keyframes\": [{\"time\": 1, \"camera\": [1, 42, 3000, 0, -30, 0]},"
+                            "{\"time\": 1, \"camera\": [1, 42, 3000, 0, -30, 0]}]}"),
+                        "keyframe 1: times must increase"));
+  EXPECT_TRUE(is_one_line_error(run("{\"keyframes\": [{\"time\": 0, \"camera\": [1, 2]}]}"),
+                                "keyframe 0: needs"));
+  EXPECT_TRUE(is_one_line_error(run(ok, {"--mode", "sometimes"}), "--mode"));
+  EXPECT_TRUE(is_one_line_error(run(ok, {"--pager", "radius:0"}), "--pager"));
+  EXPECT_TRUE(is_one_line_error(run(ok, {"--memory-budget", "lots"}), "--memory-budget"));
+  EXPECT_TRUE(is_one_line_error(run(ok, {"--camera", kGroundStill}), "--path replaces"));
+  EXPECT_TRUE(is_one_line_error(run_relief({"render", store().string(), "--path",
+                                            scratch("missing.json").string(), "-o", out.string()}),
+                                "missing.json"));
+}
+
+}  // namespace
+}  // namespace relief::testing

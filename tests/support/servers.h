@@ -1,0 +1,19 @@
+#pragma once
+// Real servers on loopback for the tests: ports, waiting for a listener, and
+// an nginx serving a directory.
+#include <filesystem>
+
+namespace relief::testing {
+
+// A loopback port nothing listens on right now.
+int free_port();
+// A connected socket to 127.0.0.1:port, or -1.
+int connect_to(int port);
+// Waits (up to 4 s) until something accepts connections on the port; a test
+// failure otherwise.
+void wait_for(int port);
+// Starts nginx in the foreground serving `root` on the port, its files under
+// `prefix`; returns its pid once it listens (stop it with SIGTERM).
+int start_nginx(const std::filesystem::path& root, const std::filesystem::path& prefix, int port);
+
+}  // namespace relief::testing
