@@ -2,6 +2,7 @@
 #include <string>
 
 #include "relief/base/result.h"
+#include "relief/net/disk_cache.h"
 #include "relief/stream/throttled_source.h"
 #include "relief/tiles/store.h"
 
@@ -14,7 +15,9 @@ struct StoreAccess {
 };
 
 // A store directory, or a store served over HTTP: "http://host:port/path/",
-// several comma-separated URLs for mirrors.
-Result<tiles::Store> open_store(const std::string& location, const StoreAccess& access = {});
+// several comma-separated URLs for mirrors. `disk_cache`, when given, receives
+// the disk cache in front of a remote store (for its statistics).
+Result<tiles::Store> open_store(const std::string& location, const StoreAccess& access = {},
+                                std::shared_ptr<net::DiskCache>* disk_cache = nullptr);
 
 }  // namespace relief::cli

@@ -205,7 +205,7 @@ int render_path(const Args& args, RenderSetup& setup) {
 
   const tiles::Store& store = setup.store;
   const lod::MeshTopology mesh(setup.mesh_level);
-  std::unique_ptr<stream::TileLoader> loader;
+  std::unique_ptr<stream::TileLoader> loader, imagery_loader;
   std::unique_ptr<lod::TerrainModel> terrain;
   json events = json::array();
   size_t frame_index = 0;
@@ -214,6 +214,11 @@ int render_path(const Args& args, RenderSetup& setup) {
     if (!l) return report_error(l.error().message);
     loader = std::move(*l);
     terrain = std::make_unique<lod::TerrainModel>(store, mesh, *loader);
+    if (setup.imagery) {
+      auto il = stream::TileLoader::create(*setup.imagery, options->loader);
+      if (!il) return report_error(il.error().message);
+      imagery_loader = std::move(*il);
+    }
     if (!options->events.empty()) {
       loader->subscribe([&](const stream::TileEvent& e) {
         events.push_back({{"frame", frame_index},
@@ -233,7 +238,7 @@ int render_path(const Args& args, RenderSetup& setup) {
   auto target = render::make_offscreen_target(setup.width, setup.height);
   if (!target) return report_error(target.error().message);
   auto renderer = render::TerrainRenderer::create(
-      *terrain, setup.imagery ? &*setup.imagery : nullptr, setup.gpu_budget);
+      *terrain, setup.imagery ? &*setup.imagery : nullptr, setup.gpu_budget, imagery_loader.get());
   if (!renderer) return report_error(renderer.error().message);
   render::RenderOptions ro;
   ro.exaggeration = static_cast<float>(setup.exaggeration);
@@ -244,7 +249,7 @@ int render_path(const Args& args, RenderSetup& setup) {
   const size_t path_frames = static_cast<size_t>(std::floor(duration * fps + 1e-9)) + 1;
   const double lookahead = 0.5 * fps;  // prefetch half a second ahead
   json frames = json::array();
-  std::vector<double> frame_ms;
+  std::vector<double> frame_ms, cpu_ms;
   std::vector<std::pair<size_t, double>> cuts;  // frame, time of each cut
   for (size_t k = 1; k < keys.size(); ++k) {
     if (keys[k].cut) cuts.emplace_back(0, keys[k].time);
@@ -252,6 +257,7 @@ int render_path(const Args& args, RenderSetup& setup) {
   const auto start = Clock::now();
   lod::Camera previous = keys.front().camera;
   bool complete = false;
+  uint64_t imagery_misses = 0;  // a frame that missed imagery is not complete
   double settle_start = -1;
   lod::Selection last;
   for (frame_index = 0;; ++frame_index) {
@@ -295,11 +301,14 @@ int render_path(const Args& args, RenderSetup& setup) {
       if (!n) return report_error(n.error().message);
     }
     terrain->end_frame();
+    if (imagery_loader) imagery_loader->begin_frame();  // the renderer requests imagery
     auto frame = (*renderer)->draw(*view, *selection, **target, ro);
+    if (imagery_loader) imagery_loader->end_frame();
     if (!frame) return report_error(frame.error().message);
     const double ms = std::chrono::duration<double>(Clock::now() - frame_start).count() * 1e3;
     complete = selection->stats.waiting == 0;
     frame_ms.push_back(ms);
+    cpu_ms.push_back(ms - frame->gpu_seconds * 1e3);
     for (auto& [frame_of_cut, time] : cuts) {
       if (!frame_of_cut && t >= time) frame_of_cut = frame_index + 1;  // 1-based: 0 = not yet
     }
@@ -309,6 +318,7 @@ int render_path(const Args& args, RenderSetup& setup) {
               {"camera",
                {camera.lon, camera.lat, camera.height, camera.heading, camera.pitch, camera.roll}},
               {"frame_ms", ms},
+              {"cpu_ms", cpu_ms.back()},
               {"selection_ms", selection->stats.seconds * 1e3},
               {"draw_ms", (frame->prepare_seconds + frame->gpu_seconds) * 1e3},
               {"quads", selection->stats.quads},
@@ -323,6 +333,20 @@ int render_path(const Args& args, RenderSetup& setup) {
                 {"evicted", frame->gpu_evicted}}},
               {"rss_bytes", resident_set_bytes()}};
     if (loader) f["memory"] = loader_json(loader->stats());
+    if (setup.disk_cache) {
+      const net::DiskCacheStats d = setup.disk_cache->stats();
+      f["disk_cache"] = {{"bytes", d.bytes},         {"budget_bytes", setup.disk_cache_budget},
+                         {"hits", d.hits},           {"misses", d.misses},
+                         {"evictions", d.evictions}, {"shared", d.shared},
+                         {"repaired", d.repaired}};
+    }
+    if (imagery_loader) {
+      const stream::LoaderStats is = imagery_loader->stats();
+      f["imagery_memory"] = loader_json(is);
+      complete = complete && is.queued == 0 && is.in_flight == 0 && is.misses == imagery_misses;
+      imagery_misses = is.misses;
+      f["complete"] = complete;
+    }
     frames.push_back(std::move(f));
 
     if (options->frames) {
@@ -363,6 +387,8 @@ int render_path(const Args& args, RenderSetup& setup) {
                   {"p50_frame_ms", percentile(frame_ms, 0.5)},
                   {"p99_frame_ms", percentile(frame_ms, 0.99)},
                   {"max_frame_ms", percentile(frame_ms, 1.0)},
+                  {"p50_cpu_ms", percentile(cpu_ms, 0.5)},
+                  {"p99_cpu_ms", percentile(cpu_ms, 0.99)},
                   {"complete", complete},
                   {"bytes_fetched", ls.bytes_fetched},
                   {"final_view_bytes", view_bytes(store, *terrain, last)},

@@ -14,8 +14,9 @@ namespace relief::cli {
 namespace {
 
 Result<tiles::Store> open_kind(const std::string& path, tiles::DatasetKind kind, const char* role,
-                               const StoreAccess& access = {}) {
-  tiles::Store s = RELIEF_TRY(open_store(path, access));
+                               const StoreAccess& access = {},
+                               std::shared_ptr<net::DiskCache>* disk_cache = nullptr) {
+  tiles::Store s = RELIEF_TRY(open_store(path, access, disk_cache));
   if (s.manifest().kind != kind) {
     return fail(fmt::format("{}: holds {} data; {} must be an {} store", path,
                             tiles::to_string(s.manifest().kind), role, tiles::to_string(kind)));
@@ -73,8 +74,9 @@ Result<RenderSetup> parse_render_setup(const Args& args) {
     if (!(*mbit > 0)) return fail("--simulate-bandwidth: must be > 0 Mbit/s");
     access.link.bits_per_second = *mbit * 1e6;
   }
-  s.store =
-      RELIEF_TRY(open_kind(args.positional()[0], tiles::DatasetKind::Elevation, "STORE", access));
+  s.store = RELIEF_TRY(open_kind(args.positional()[0], tiles::DatasetKind::Elevation, "STORE",
+                                 access, &s.disk_cache));
+  s.disk_cache_budget = access.cache_bytes;
   if (auto path = args.get("--imagery")) {
     s.imagery = RELIEF_TRY(open_kind(*path, tiles::DatasetKind::Imagery, "--imagery"));
   }

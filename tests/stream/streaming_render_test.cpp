@@ -44,6 +44,16 @@ class StreamingRenderTest : public ::testing::Test {
   }
   static void TearDownTestSuite() { delete dir_; }
   static fs::path store() { return dir_->path() / "store"; }
+  static fs::path imagery() {
+    const fs::path path = dir_->path() / "imagery";
+    if (!fs::exists(path / "manifest.json")) {
+      EXPECT_EQ(run_relief({"build", data("imagery/world.rgb.tif"), "--kind", "imagery", "-o",
+                            path.string(), "--tile-size", "128x64", "-q"})
+                    .exit_code,
+                0);
+    }
+    return path;
+  }
   static fs::path scratch(const std::string& name) { return dir_->path() / name; }
 
   // Writes a path file and renders it; returns the statistics.
@@ -115,6 +125,24 @@ TEST_F(StreamingRenderTest, InteractiveFramesDoNotWaitAndConvergeToTheCompleteFr
       render_path("complete", still(kGround), {"--simulate-latency", "300", "--mode", "complete"});
   EXPECT_GE(c["frames"][0]["frame_ms"].get<double>(), 300);
   EXPECT_TRUE(c["frames"][0]["complete"].get<bool>());
+}
+
+TEST_F(StreamingRenderTest, DrapedImageryStreamsToo) {
+  const json s = render_path(
+      "imagery", still(kGround),
+      {"--imagery", imagery().string(), "--simulate-latency", "300", "--until-complete", "60"});
+  const json& frames = s["frames"];
+  ASSERT_GE(frames.size(), 3u);
+  EXPECT_TRUE(s["summary"]["complete"].get<bool>());
+  for (const json& f : frames) EXPECT_LT(f["frame_ms"].get<double>(), 200) << f["frame"];
+  EXPECT_GT(frames.back()["imagery_memory"]["loaded"].get<int>(), 1);
+  const fs::path ref = scratch("imagery-still.png");
+  const RunResult r =
+      run_relief({"render", store().string(), "--imagery", imagery().string(), "--camera",
+                  kGroundStill, "-o", ref.string(), "--size", fmt::format("{}x{}", kWidth, kHeight),
+                  "--mesh-level", "3", "--sky", "255,0,255"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(frame("imagery", frames.size() - 1).rgba, read_png(ref, kWidth, kHeight).rgba);
 }
 
 // Screen-space distance of a tile's centre from the centre of the view.
@@ -207,8 +235,15 @@ TEST_F(StreamingRenderTest, ServedStoresStreamAndAServerThatDiesIsSurvived) {
   // nginx serving the store: the same final frame as the local store.
   const int nginx_port = free_port();
   const int nginx = start_nginx(store(), scratch("nginx-server"), nginx_port);
-  const json via_nginx = render_path("nginx", still(kGround), {"--until-complete", "60"},
-                                     fmt::format("http://127.0.0.1:{}/", nginx_port));
+  // Through a disk cache (L1) too, with a budget below the view's bytes.
+  const json via_nginx = render_path(
+      "nginx", still(kGround),
+      {"--until-complete", "60", "--cache", scratch("l1").string(), "--cache-size", "1MiB"},
+      fmt::format("http://127.0.0.1:{}/", nginx_port));
+  for (const json& f : via_nginx["frames"]) {
+    EXPECT_LE(f["disk_cache"]["bytes"].get<uint64_t>(), uint64_t{1} << 20) << f["frame"];
+  }
+  EXPECT_GT(via_nginx["frames"].back()["disk_cache"]["evictions"].get<int>(), 0);
   const json local = render_path("local", still(kGround), {"--until-complete", "60"});
   ::kill(nginx, SIGTERM);
   ::waitpid(nginx, nullptr, 0);

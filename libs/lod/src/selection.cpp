@@ -66,6 +66,7 @@ class Selector {
       SelectedQuad q;
       q.key = key;
       q.error_pixels = leaf.error_pixels;
+      q.priority = leaf.priority;
       classify_neighbours(q);
       s.quads.push_back(q);
     });
@@ -88,6 +89,7 @@ class Selector {
     bool visible = false;
     double error_pixels = 0;
     bool split_for_samples = false;  // coarser samples than pixels
+    double priority = 0;
   };
 
   // Culls and measures one quad: visible, and its projected error bound.
@@ -100,6 +102,7 @@ class Selector {
     Leaf leaf;
     if (outside_frustum(box, view_ref) || hidden_by_horizon(box, range)) return leaf;
     leaf.visible = true;
+    leaf.priority = priority(box);
     // Brute force: the dataset alone, every quad down to the finest level.
     if (o_.full_resolution) {
       leaf.visible = terrain_.window(key).tile.has_value();

@@ -18,7 +18,7 @@ class BlockingProvider final : public TileProvider {
 
   Result<TilePtr> get(const geo::TileKey& key) override {
     if (auto hit = tiles_.get(key)) return hit;
-    TilePtr tile = RELIEF_TRY(decode_heights(store_, key));
+    TilePtr tile = RELIEF_TRY(decode_tile(store_, key));
     tiles_.put(key, tile);
     return tile;
   }
@@ -42,6 +42,12 @@ Result<TilePtr> decode_heights(const tiles::Store& store, const geo::TileKey& ke
   for (float& v : t.raster.f32()) {
     if (std::isnan(v)) v = 0;
   }
+  return std::make_shared<const tiles::Raster>(std::move(t.raster));
+}
+
+Result<TilePtr> decode_tile(const tiles::Store& store, const geo::TileKey& key) {
+  if (store.manifest().sample_type == tiles::SampleType::Float32) return decode_heights(store, key);
+  tiles::Tile t = RELIEF_TRY(store.read_tile(key));
   return std::make_shared<const tiles::Raster>(std::move(t.raster));
 }
 

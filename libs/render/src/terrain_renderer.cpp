@@ -67,8 +67,15 @@ GLuint make_texture(GLenum internal_format, int w, int h, GLenum format, GLenum 
 
 class GlTerrainRenderer final : public TerrainRenderer {
  public:
-  GlTerrainRenderer(lod::TerrainModel& elevation, const tiles::Store* imagery, uint64_t gpu_budget)
-      : elevation_(elevation), imagery_(imagery), textures_(gpu_budget) {}
+  GlTerrainRenderer(lod::TerrainModel& elevation, const tiles::Store* imagery,
+                    lod::TileProvider* imagery_tiles, uint64_t gpu_budget)
+      : elevation_(elevation), imagery_(imagery), textures_(gpu_budget) {
+    if (imagery_ && !imagery_tiles) {  // a still: read when needed
+      owned_imagery_tiles_ = lod::blocking_provider(*imagery_, uint64_t{256} << 20);
+      imagery_tiles = owned_imagery_tiles_.get();
+    }
+    imagery_tiles_ = imagery_tiles;
+  }
   ~GlTerrainRenderer() override {
     glDeleteTextures(1, &zero_texture_);
     glDeleteBuffers(1, &vertex_buffer_);
@@ -138,8 +145,7 @@ class GlTerrainRenderer final : public TerrainRenderer {
       t.parent_window = elevation_.parent_window(q.key);
       t.own = RELIEF_TRY(height_texture(t.own_window.tile));
       t.parent = RELIEF_TRY(height_texture(t.parent_window.tile));
-      t.imagery_window = imagery_window(q.key);
-      t.imagery = RELIEF_TRY(imagery_texture(t.imagery_window.tile));
+      std::tie(t.imagery_window, t.imagery) = RELIEF_TRY(imagery_for(q));
       textures.push_back(t);
     }
     stats.prepare_seconds = std::chrono::duration<double>(Clock::now() - start).count();
@@ -265,33 +271,47 @@ class GlTerrainRenderer final : public TerrainRenderer {
     return t;
   }
 
-  lod::DataWindow imagery_window(const TileKey& key) const {
+  // The imagery of a quad: the texture of the imagery tile at the quad's
+  // level (or the imagery's finest), else of its nearest ancestor whose
+  // texture or decoded tile is at hand (non-blocking providers: the wanted
+  // tile is requested meanwhile). Colour has no cracks to fear, so any
+  // ancestor will do.
+  Result<std::pair<lod::DataWindow, GLuint>> imagery_for(const lod::SelectedQuad& quad) {
     lod::DataWindow w;
-    if (!imagery_) return w;
-    const int max = imagery_->manifest().max_level;
-    const int iw = imagery_->grid().width(), ih = imagery_->grid().height();
-    const int m = std::max(0, key.level - max);
-    const TileKey a{key.level - m, key.x >> m, key.y >> m};
-    if (imagery_->has_tile(a)) w.tile = a;
-    w.width = std::ldexp(iw, -m);
-    w.height = std::ldexp(ih, -m);
-    w.x0 = (key.x - (a.x << m)) * w.width;
-    w.y0 = (key.y - (a.y << m)) * w.height;
-    return w;
-  }
-
-  Result<GLuint> imagery_texture(const std::optional<TileKey>& key) {
-    if (!key || !imagery_) return GLuint{0};
-    if (auto t = textures_.find({*key, true})) return *t;
-    const tiles::Tile tile = RELIEF_TRY(imagery_->read_tile(*key));
-    const GLuint t = make_texture(GL_RGBA8, tile.raster.width(), tile.raster.height(), GL_RGBA,
-                                  GL_UNSIGNED_BYTE, tile.raster.u8().data());
-    textures_.insert({*key, true}, t, tile.raster.byte_size());
-    return t;
+    if (!imagery_) return std::pair{w, GLuint{0}};
+    const TileKey& key = quad.key;
+    const int finest = std::min(key.level, imagery_->manifest().max_level);
+    GLuint texture = 0;
+    int m = key.level - finest;
+    for (TileKey a{finest, key.x >> m, key.y >> m};; a = *a.parent(), ++m) {
+      if (imagery_->has_tile(a)) {
+        if (auto t = textures_.find({a, true})) {
+          texture = *t;
+        } else if (const lod::TilePtr tile = RELIEF_TRY(imagery_tiles_->get(a))) {
+          texture = make_texture(GL_RGBA8, tile->width(), tile->height(), GL_RGBA, GL_UNSIGNED_BYTE,
+                                 tile->u8().data());
+          textures_.insert({a, true}, texture, tile->byte_size());
+        } else if (a.level == finest) {
+          imagery_tiles_->request(a, quad.priority);
+        }
+        if (texture) {
+          w.tile = a;
+          w.width = std::ldexp(imagery_->grid().width(), -m);
+          w.height = std::ldexp(imagery_->grid().height(), -m);
+          w.x0 = (key.x - (a.x << m)) * w.width;
+          w.y0 = (key.y - (a.y << m)) * w.height;
+          break;
+        }
+      }
+      if (a.level == 0) break;
+    }
+    return std::pair{w, texture};
   }
 
   lod::TerrainModel& elevation_;
   const tiles::Store* imagery_;
+  std::unique_ptr<lod::TileProvider> owned_imagery_tiles_;
+  lod::TileProvider* imagery_tiles_ = nullptr;
   GLuint program_ = 0, vao_ = 0, vertex_buffer_ = 0, index_buffer_ = 0, zero_texture_ = 0;
   size_t vertex_capacity_ = 0;
   std::vector<Vertex> staging_;
@@ -303,11 +323,12 @@ class GlTerrainRenderer final : public TerrainRenderer {
 
 Result<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(lod::TerrainModel& elevation,
                                                                  const tiles::Store* imagery,
-                                                                 uint64_t gpu_budget) {
+                                                                 uint64_t gpu_budget,
+                                                                 lod::TileProvider* imagery_tiles) {
   if (imagery && imagery->manifest().sample_type != tiles::SampleType::UInt8) {
     return fail(imagery->root().string() + ": --imagery needs an imagery store (RGBA tiles)");
   }
-  auto r = std::make_unique<GlTerrainRenderer>(elevation, imagery, gpu_budget);
+  auto r = std::make_unique<GlTerrainRenderer>(elevation, imagery, imagery_tiles, gpu_budget);
   RELIEF_CHECK(r->init());
   return std::unique_ptr<TerrainRenderer>(std::move(r));
 }

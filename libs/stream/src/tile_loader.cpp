@@ -140,7 +140,7 @@ struct TileLoader::Impl {
       move(r.key, e, TileState::Loading, {TileEventKind::Started, r.key, 0, r.prefetch, {}});
       ++in_flight;
       lock.unlock();
-      Result<lod::TilePtr> tile = lod::decode_heights(store, r.key);
+      Result<lod::TilePtr> tile = lod::decode_tile(store, r.key);
       const tiles::IndexEntry* ie = store.index(r.key.level).find(r.key);
       lock.lock();
       --in_flight;
@@ -189,7 +189,7 @@ Result<std::unique_ptr<TileLoader>> TileLoader::create(const tiles::Store& store
   if (options.max_in_flight < 1) return fail("loader: at least one load must be allowed in flight");
   auto impl = std::make_unique<Impl>(store, options);
   for (const tiles::IndexEntry& ie : store.index(0).entries()) {
-    lod::TilePtr tile = RELIEF_TRY(lod::decode_heights(store, ie.key));
+    lod::TilePtr tile = RELIEF_TRY(lod::decode_tile(store, ie.key));
     Entry& e = impl->entries[ie.key];
     e.state = TileState::Resident;
     e.permanent = true;

@@ -1,5 +1,6 @@
 #pragma once
-// Where a TerrainModel gets decoded elevation tiles (heights, nodata as 0).
+// Where a TerrainModel gets decoded elevation tiles (heights, nodata as 0),
+// and the renderer imagery tiles.
 //
 // Complete frames use a provider that waits for every tile. Interactive
 // frames use one that never waits (libs/stream): a tile that is not resident
@@ -43,5 +44,7 @@ std::unique_ptr<TileProvider> blocking_provider(const tiles::Store& store, uint6
 // A store tile as heights: Float32 samples with NaN (nodata) replaced by 0;
 // an error naming the store for anything else.
 Result<TilePtr> decode_heights(const tiles::Store& store, const geo::TileKey& key);
+// A store tile ready to draw: heights as above, imagery (RGBA8) as stored.
+Result<TilePtr> decode_tile(const tiles::Store& store, const geo::TileKey& key);
 
 }  // namespace relief::lod

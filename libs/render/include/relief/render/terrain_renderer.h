@@ -35,9 +35,13 @@ class TerrainRenderer {
  public:
   // `imagery` may be null. Both must outlive the renderer. Tile textures are
   // kept within `gpu_budget` bytes, except those the current frame draws.
-  static Result<std::unique_ptr<TerrainRenderer>> create(lod::TerrainModel& elevation,
-                                                         const tiles::Store* imagery,
-                                                         uint64_t gpu_budget = uint64_t{1} << 30);
+  // Imagery tiles come from `imagery_tiles` when given (a non-blocking one
+  // for interactive frames: quads whose imagery is not resident show their
+  // nearest resident ancestor's, and the tile is requested during draw()),
+  // otherwise they are read when needed.
+  static Result<std::unique_ptr<TerrainRenderer>> create(
+      lod::TerrainModel& elevation, const tiles::Store* imagery,
+      uint64_t gpu_budget = uint64_t{1} << 30, lod::TileProvider* imagery_tiles = nullptr);
   virtual ~TerrainRenderer() = default;
   virtual Result<FrameStats> draw(const lod::View& view, const lod::Selection& selection,
                                   RenderTarget& target, const RenderOptions& options) = 0;

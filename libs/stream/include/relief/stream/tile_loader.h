@@ -1,6 +1,7 @@
 #pragma once
-// The memory cache (L2) of decoded elevation tiles and the asynchronous
-// loader that fills it, as a non-blocking lod::TileProvider.
+// The memory cache (L2) of decoded tiles of one store (elevation heights or
+// imagery) and the asynchronous loader that fills it, as a non-blocking
+// lod::TileProvider.
 //
 // Threads: the render thread calls everything here; worker threads (as many
 // as loads may be in flight) read and decode tiles. Event listeners run on
