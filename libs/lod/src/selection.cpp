@@ -190,6 +190,17 @@ class Selector {
   // a deep view does not wait one round trip per level. Needs no tiles: above
   // the store's finest level, errors come from the index.
   Status want_below(const TileKey& key, double cap) {
+    // The restricted property will split the same-level neighbours of
+    // `key` (its children sit beside them): their data is wanted too.
+    for (int dy = -1; dy <= 1; ++dy) {
+      for (int dx = -1; dx <= 1; ++dx) {
+        const auto n = key.neighbour(dx, dy);
+        if (!n || (!dx && !dy)) continue;
+        if (const DataWindow w = terrain_.window(*n); w.tile && !terrain_.available(*w.tile)) {
+          terrain_.request(*w.tile, cap * 0.25);
+        }
+      }
+    }
     if (key.level + 1 > terrain_.data_max_level()) return {};
     const Leaf leaf = RELIEF_TRY(assess(key));
     if (!leaf.visible || leaf.error_pixels <= o_.pixel_error) return {};
