@@ -150,15 +150,31 @@ class Selector {
     return pixels / (1 + off * off);
   }
 
+  // Requests, at the lowest priority, the coarsest tile on the way from the
+  // root to `tile` that is not available (ancestors load first).
+  void request_first_missing(const TileKey& tile) {
+    std::optional<TileKey> missing;
+    for (std::optional<TileKey> k = tile; k; k = k->parent()) {
+      if (!terrain_.available(*k)) missing = k;
+    }
+    if (missing) terrain_.request(*missing, 0);
+  }
+
   // Interactive frames draw only resident data: a quad splits only when the
   // data of each of its visible children is available now; the missing ones
   // are requested. Deeper than the store, children draw the same tile.
   Result<bool> children_available(const TileKey& key) {
     if (terrain_.blocking()) return true;
     if (frozen_.contains(key)) return false;
+    // Children of a culled quad are culled too (their bounds nest): above the
+    // store's finest level, splitting it for the restriction needs no data.
+    if (const Leaf* leaf = leaves_.find(key);
+        leaf && !leaf->visible && key.level < terrain_.data_max_level()) {
+      return true;
+    }
     if (const DataWindow own = terrain_.window(key); own.tile && !terrain_.available(*own.tile)) {
       // A culled quad without its data: that loads first (ancestors first).
-      terrain_.request(*own.tile, 0);
+      request_first_missing(*own.tile);
       ++waiting_;
       return false;
     }
@@ -170,7 +186,7 @@ class Selector {
       if (child.level > terrain_.data_max_level()) {
         // An unloaded quad, culled before (its bounds need the tile): only
         // restriction splits it. Lowest priority.
-        terrain_.request(*w.tile, 0);
+        request_first_missing(*w.tile);
         ++waiting_;
         return false;
       }
@@ -190,17 +206,6 @@ class Selector {
   // a deep view does not wait one round trip per level. Needs no tiles: above
   // the store's finest level, errors come from the index.
   Status want_below(const TileKey& key, double cap) {
-    // The restricted property will split the same-level neighbours of
-    // `key` (its children sit beside them): their data is wanted too.
-    for (int dy = -1; dy <= 1; ++dy) {
-      for (int dx = -1; dx <= 1; ++dx) {
-        const auto n = key.neighbour(dx, dy);
-        if (!n || (!dx && !dy)) continue;
-        if (const DataWindow w = terrain_.window(*n); w.tile && !terrain_.available(*w.tile)) {
-          terrain_.request(*w.tile, cap * 0.25);
-        }
-      }
-    }
     if (key.level + 1 > terrain_.data_max_level()) return {};
     const Leaf leaf = RELIEF_TRY(assess(key));
     if (!leaf.visible || leaf.error_pixels <= o_.pixel_error) return {};
