@@ -43,12 +43,6 @@ class Stores : public ::testing::Environment {
 };
 const auto* const kStores = ::testing::AddGlobalTestEnvironment(new Stores);
 
-// Mesa's llvmpipe driver leaves ~112 bytes behind when EGL unloads it, which
-// LeakSanitizer reports against an unmapped address: leak checking is off for
-// rendering runs of ASan builds (every other ASan check stays on). The
-// variable is ignored by normal builds.
-const std::string kNoMesaLeakReport = "ASAN_OPTIONS=detect_leaks=0 ";
-
 Image render(const std::vector<std::string>& extra, int w, int h, const fs::path& out) {
   std::vector<std::string> args = {"render", Stores::pyrenees().string(),
                                    "--size", std::to_string(w) + "x" + std::to_string(h),

@@ -70,7 +70,7 @@ class StreamingRenderTest : public ::testing::Test {
                                      "--events",     (out / "events.jsonl").string(),
                                      "--sky",        "255,0,255"};
     args.insert(args.end(), extra.begin(), extra.end());
-    const RunResult r = run_relief(args);
+    const RunResult r = run_relief(args, kNoMesaLeakReport);
     EXPECT_EQ(r.exit_code, 0) << r.err;
     std::ifstream in(out / "stats.json");
     json stats = json::parse(in, nullptr, false);
@@ -111,9 +111,10 @@ TEST_F(StreamingRenderTest, InteractiveFramesDoNotWaitAndConvergeToTheCompleteFr
   }
   // The last frame is the complete still of the same view.
   const fs::path ref = scratch("interactive-still.png");
-  const RunResult r = run_relief({"render", store().string(), "--camera", kGroundStill, "-o",
-                                  ref.string(), "--size", fmt::format("{}x{}", kWidth, kHeight),
-                                  "--mesh-level", "3", "--sky", "255,0,255"});
+  const RunResult r = run_relief(
+      {"render", store().string(), "--camera", kGroundStill, "-o", ref.string(), "--size",
+       fmt::format("{}x{}", kWidth, kHeight), "--mesh-level", "3", "--sky", "255,0,255"},
+      kNoMesaLeakReport);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const Image want = read_png(ref, kWidth, kHeight);
   const Image got = frame("interactive", frames.size() - 1);
@@ -140,7 +141,8 @@ TEST_F(StreamingRenderTest, DrapedImageryStreamsToo) {
   const RunResult r =
       run_relief({"render", store().string(), "--imagery", imagery().string(), "--camera",
                   kGroundStill, "-o", ref.string(), "--size", fmt::format("{}x{}", kWidth, kHeight),
-                  "--mesh-level", "3", "--sky", "255,0,255"});
+                  "--mesh-level", "3", "--sky", "255,0,255"},
+                 kNoMesaLeakReport);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(frame("imagery", frames.size() - 1).rgba, read_png(ref, kWidth, kHeight).rgba);
 }
