@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The main job on bundled data: builds relief, turns the SRTM tiles of the
 # eastern Pyrenees and Catalonia into a tile pyramid, verifies it, describes
-# it and renders a still of it; then builds the Umbra SAR image into a store, reduces its speckle and
+# it, renders a still of it and flies over it (frames in out/pyrenees-flight/); then builds the Umbra SAR image into a store, reduces its speckle and
 # dynamic range on every level, and detects point targets.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -16,6 +16,10 @@ OUT=${1:-out/pyrenees}
 # A still of the pyramid, headless (EGL; Mesa's llvmpipe without a GPU).
 "$RELIEF" render "$OUT" --look-at 1.5,42.5,1500,40000,0,-30 --size 1280x720 \
   -o "$OUT.png" --stats "$OUT-frame.json"
+# A flight over it in interactive mode, through a simulated 20 ms, 50 Mbit/s
+# link: frames never wait for data; coarse tiles show until detail arrives.
+"$RELIEF" render "$OUT" --path data/paths/pyrenees-flyover.json -o "$OUT-flight" --size 640x360 \
+  --simulate-latency 20 --simulate-bandwidth 50 --until-complete 10 --stats "$OUT-flight.json"
 
 SAR=$(dirname "$OUT")/umbra
 rm -rf "$SAR" "$SAR-lee" "$SAR-grey"
