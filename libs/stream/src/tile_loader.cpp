@@ -85,7 +85,7 @@ struct TileLoader::Impl {
   std::vector<TileEvent> events;
   LoaderStats counters;
   uint64_t resident_bytes = 0;
-  uint32_t in_flight = 0;
+  uint32_t in_flight = 0, prefetch_in_flight = 0;
   // Render thread only.
   std::unordered_map<TileKey, Request, geo::TileKeyHash> frame_requests;
   std::vector<std::function<void(const TileEvent&)>> listeners;
@@ -129,21 +129,41 @@ struct TileLoader::Impl {
     resident_bytes += e.bytes;
   }
 
+  // The best request, except that a quarter of the loads in flight may go
+  // to the best prefetch request: otherwise, on a busy link, the current
+  // view always has something queued and prefetch would never run.
+  Request take_next() {
+    auto pick = std::prev(queue.end());
+    if (!pick->prefetch && 4 * prefetch_in_flight < static_cast<uint32_t>(options.max_in_flight) &&
+        in_flight > 0) {
+      for (auto it = queue.rbegin(); it != queue.rend(); ++it) {
+        if (it->prefetch) {
+          pick = std::prev(it.base());
+          break;
+        }
+      }
+    }
+    const Request r = *pick;
+    queue.erase(pick);
+    return r;
+  }
+
   void work() {
     std::unique_lock lock(mutex);
     for (;;) {
       wake.wait(lock, [&] { return stopping || !queue.empty(); });
       if (stopping) return;
-      const Request r = queue.back();
-      queue.pop_back();
+      const Request r = take_next();
       Entry& e = entries.at(r.key);
       move(r.key, e, TileState::Loading, {TileEventKind::Started, r.key, 0, r.prefetch, {}});
       ++in_flight;
+      prefetch_in_flight += r.prefetch;
       lock.unlock();
       Result<lod::TilePtr> tile = lod::decode_tile(store, r.key);
       const tiles::IndexEntry* ie = store.index(r.key.level).find(r.key);
       lock.lock();
       --in_flight;
+      prefetch_in_flight -= r.prefetch;
       Entry& done = entries.at(r.key);  // Loading entries are never erased by others
       if (!tile) {
         ++counters.failed;

@@ -12,7 +12,8 @@
 // cancelled. Ancestors come first by construction: selection requests a
 // quad's children only once the quad's own data is resident. Prefetch
 // requests (the view predicted along the camera's motion) rank after every
-// request of the current view.
+// request of the current view, but may take up to a quarter of the loads in
+// flight, so they run even while the current view keeps the link busy.
 //
 // Budget: resident bytes never exceed the budget. Tiles a caller holds (the
 // TilePtr is the pin) and the level-0 tiles (loaded at creation and kept) are
