@@ -192,6 +192,7 @@ uint64_t view_bytes(const tiles::Store& store, lod::TerrainModel& terrain,
 int render_path(const Args& args, RenderSetup& setup) {
   auto options = parse_path_options(args);
   if (!options) return report_error(options.error().message);
+  if (setup.full_resolution) return report_error("--full-resolution: for stills only, not --path");
   auto path = read_path(*args.get("--path"), setup);
   if (!path) return report_error(path.error().message);
   const auto& [keys, path_fps] = *path;

@@ -299,6 +299,8 @@ TEST_F(StreamingRenderTest, BadPathsAndOptionsAreOneLineErrors) {
   EXPECT_TRUE(is_one_line_error(run(ok, {"--pager", "radius:0"}), "--pager"));
   EXPECT_TRUE(is_one_line_error(run(ok, {"--memory-budget", "lots"}), "--memory-budget"));
   EXPECT_TRUE(is_one_line_error(run(ok, {"--camera", kGroundStill}), "--path replaces"));
+  EXPECT_TRUE(is_one_line_error(run(ok, {"--full-resolution"}), "--full-resolution"));
+  EXPECT_TRUE(is_one_line_error(run(ok, {"--loads", "0"}), "--loads"));
   EXPECT_TRUE(is_one_line_error(run_relief({"render", store().string(), "--path",
                                             scratch("missing.json").string(), "-o", out.string()}),
                                 "missing.json"));
