@@ -158,7 +158,7 @@ double off_centre(const geo::TileKey& key, const lod::View& view) {
 }
 
 TEST_F(StreamingRenderTest, AncestorsAndTheScreenCentreLoadFirst) {
-  render_path("order", still("[1.5, 42.3, 5000, 0, -30, 0]"),
+  render_path("order", still("[1.5, 42.5, 12000, 0, -90, 0]"),
               {"--simulate-latency", "40", "--loads", "2", "--until-complete", "60"});
   const auto ev = events("order");
   std::map<std::string, size_t> started;
@@ -178,9 +178,10 @@ TEST_F(StreamingRenderTest, AncestorsAndTheScreenCentreLoadFirst) {
     ASSERT_NE(parent, started.end()) << k.to_string() << " loaded without its parent";
     EXPECT_LT(parent->second, started.at(k.to_string())) << k.to_string();
   }
-  // Among the finest tiles, the first quarter to load sits nearer the screen
-  // centre than the last quarter.
-  auto view = lod::make_view({1.5, 42.3, 5000, 0, -30, 0, 60, kWidth, kHeight});
+  // Looking straight down, tiles of one level cover about the same number of
+  // pixels: among the finest, the first quarter to load sits nearer the
+  // screen centre than the last quarter.
+  auto view = lod::make_view({1.5, 42.5, 12000, 0, -90, 0, 60, kWidth, kHeight});
   ASSERT_TRUE(view);
   int deepest = 0;
   for (const auto& k : order) deepest = std::max(deepest, k.level);

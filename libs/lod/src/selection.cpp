@@ -95,6 +95,13 @@ class Selector {
   // Culls and measures one quad: visible, and its projected error bound.
   Result<Leaf> assess(const TileKey& key) {
     if (!view_) return Leaf{true, rule_(key) ? INFINITY : 0.0};
+    if (key.level > terrain_.data_max_level() && !terrain_.blocking()) {
+      // Deeper than the store, a quad whose tile is not resident can only be
+      // a child of a culled quad (visible quads have their data): culled.
+      if (const DataWindow w = terrain_.window(key); w.tile && !terrain_.available(*w.tile)) {
+        return Leaf{};
+      }
+    }
     const View& view_ref = *view_;
     TerrainModel::QuadInfo* info = RELIEF_TRY(terrain_.quad(key));
     const HeightRange& range = info->range;
@@ -166,12 +173,9 @@ class Selector {
   Result<bool> children_available(const TileKey& key) {
     if (terrain_.blocking()) return true;
     if (frozen_.contains(key)) return false;
-    // Children of a culled quad are culled too (their bounds nest): above the
-    // store's finest level, splitting it for the restriction needs no data.
-    if (const Leaf* leaf = leaves_.find(key);
-        leaf && !leaf->visible && key.level < terrain_.data_max_level()) {
-      return true;
-    }
+    // Children of a culled quad are culled too (their bounds nest):
+    // splitting it for the restriction needs no data.
+    if (const Leaf* leaf = leaves_.find(key); leaf && !leaf->visible) return true;
     if (const DataWindow own = terrain_.window(key); own.tile && !terrain_.available(*own.tile)) {
       // A culled quad without its data: that loads first (ancestors first).
       request_first_missing(*own.tile);
@@ -206,6 +210,20 @@ class Selector {
   // a deep view does not wait one round trip per level. Needs no tiles: above
   // the store's finest level, errors come from the index.
   Status want_below(const TileKey& key, double cap) {
+    // The restricted property will split the visible same-level neighbours
+    // of `key` (its children sit beside them): their data is wanted too.
+    for (int dy = -1; dy <= 1; ++dy) {
+      for (int dx = -1; dx <= 1; ++dx) {
+        const auto n = key.neighbour(dx, dy);
+        if (!n || (!dx && !dy)) continue;
+        const DataWindow w = terrain_.window(*n);
+        if (!w.tile || terrain_.available(*w.tile)) continue;
+        TerrainModel::QuadInfo* info = RELIEF_TRY(terrain_.quad(*n));
+        if (outside_frustum(info->box, *view_) || hidden_by_horizon(info->box, info->range))
+          continue;
+        terrain_.request(*w.tile, cap * 0.25);
+      }
+    }
     if (key.level + 1 > terrain_.data_max_level()) return {};
     const Leaf leaf = RELIEF_TRY(assess(key));
     if (!leaf.visible || leaf.error_pixels <= o_.pixel_error) return {};
