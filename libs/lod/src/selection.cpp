@@ -19,13 +19,6 @@ namespace {
 
 using geo::TileKey;
 
-double distance_to(const Box& b, const Vec3& p) {
-  const double dx = std::max({b.lo.x - p.x, 0.0, p.x - b.hi.x});
-  const double dy = std::max({b.lo.y - p.y, 0.0, p.y - b.hi.y});
-  const double dz = std::max({b.lo.z - p.z, 0.0, p.z - b.hi.z});
-  return std::sqrt(dx * dx + dy * dy + dz * dz);
-}
-
 bool outside_frustum(const Box& b, const View& v) {
   for (const Plane& pl : v.planes) {
     // The box corner furthest along the plane normal.
@@ -109,7 +102,7 @@ class Selector {
     Leaf leaf;
     if (outside_frustum(box, view_ref) || hidden_by_horizon(box, range)) return leaf;
     leaf.visible = true;
-    leaf.priority = priority(box);
+    if (!terrain_.blocking()) leaf.priority = priority(box);  // only loads need it
     // Brute force: the dataset alone, every quad down to the finest level.
     if (o_.full_resolution) {
       leaf.visible = terrain_.window(key).tile.has_value();

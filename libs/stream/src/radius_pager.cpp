@@ -11,13 +11,6 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-double distance_to(const lod::Box& b, const lod::Vec3& p) {
-  const double dx = std::max({b.lo.x - p.x, 0.0, p.x - b.hi.x});
-  const double dy = std::max({b.lo.y - p.y, 0.0, p.y - b.hi.y});
-  const double dz = std::max({b.lo.z - p.z, 0.0, p.z - b.hi.z});
-  return std::sqrt(dx * dx + dy * dy + dz * dz);
-}
-
 }  // namespace
 
 Result<size_t> request_radius(lod::TerrainModel& terrain, const tiles::Store& store,
@@ -46,7 +39,7 @@ Result<size_t> request_radius(lod::TerrainModel& terrain, const tiles::Store& st
                                static_cast<uint32_t>(y)};
         if (!store.has_tile(key)) continue;
         const lod::TerrainModel::QuadInfo* info = RELIEF_TRY(terrain.quad(key));
-        const double d = distance_to(info->box, eye);
+        const double d = lod::distance_to(info->box, eye);
         if (d > radius || terrain.available(key)) continue;
         terrain.request(key, (store.manifest().max_level - level + 1) * 1e12 - d);
         ++count;

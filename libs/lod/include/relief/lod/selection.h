@@ -38,7 +38,7 @@ struct SelectedQuad {
   uint8_t coarse_sides = 0;    // Side bits: neighbours one level coarser (take parent data)
   uint8_t coarse_corners = 0;  // Corner bits: a quad sharing the corner is coarser
   double error_pixels = 0;     // the bound that stopped the split
-  double priority = 0;         // view priority of loading its data (higher first)
+  double priority = 0;         // view priority of loading its data (interactive frames only)
   // Indices into Selection::quads of the neighbours across each side, two per
   // side (west, east, north, south): both set when the side has two finer
   // neighbours, the first alone otherwise; -1 where there is none on screen.

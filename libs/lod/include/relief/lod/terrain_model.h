@@ -36,6 +36,9 @@ struct Box {
   Vec3 lo, hi;
 };
 
+// Distance from a point to the nearest point of the box (0 inside).
+double distance_to(const Box& box, const Vec3& point);
+
 // Used by one thread at a time (the render thread): its caches are not locked.
 class TerrainModel {
  public:
