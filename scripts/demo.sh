@@ -10,7 +10,7 @@ BUILD_DIR=${RELIEF_BUILD_DIR:-build}
 RELIEF="$BUILD_DIR/apps/relief/relief"
 OUT=${1:-out/pyrenees}
 "$RELIEF" build data/srtm/N41E001.hgt.zip data/srtm/N42E001.hgt.zip \
-  -o "$OUT" --kind elevation --overwrite
+  -o "$OUT" --kind elevation --overwrite --fill-voids
 "$RELIEF" verify "$OUT"
 "$RELIEF" info "$OUT"
 # A still of the pyramid, headless (EGL; Mesa's llvmpipe without a GPU).

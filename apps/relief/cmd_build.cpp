@@ -35,6 +35,9 @@ options:
                        as gdalwarp -et; 0 transforms every sample exactly)
   --gdal-warp          resample every input through GDAL's warper, also inputs
                        already in WGS84 lon/lat (same result, slower)
+  --fill-voids         elevation: fill nodata holes inside the data (SRTM voids)
+                       by pull-push interpolation; nodata reaching an input's
+                       edge stays nodata, valid samples are never changed
   --overwrite          replace an existing store
   -q, --quiet          no progress bar
   --timings            print the wall time of each build phase
@@ -71,7 +74,8 @@ int run_build(const std::vector<std::string>& argv) {
                            {"--overwrite", "", false},
                            {"--quiet", "-q", false},
                            {"--timings", "", false},
-                           {"--gdal-warp", "", false}},
+                           {"--gdal-warp", "", false},
+                           {"--fill-voids", "", false}},
                           "build");
   if (!args) return report_error(args.error().message);
   ingest::BuildOptions o;
@@ -124,6 +128,7 @@ int run_build(const std::vector<std::string>& argv) {
   if (*warp_error) o.warp_error = **warp_error;
   o.overwrite = args->has("--overwrite");
   o.direct_resampling = !args->has("--gdal-warp");
+  o.fill_voids = args->has("--fill-voids");
 
   ThreadExecutor executor(threads->value_or(0));
   auto progress =
@@ -135,6 +140,10 @@ int run_build(const std::vector<std::string>& argv) {
               o.output.c_str(), std::string(tiles::to_string(m.kind)).c_str(), m.min_level,
               m.max_level, static_cast<unsigned long long>(report->tiles_written),
               static_cast<unsigned long long>(report->tiles_resumed), report->seconds);
+  if (report->voids_filled) {
+    std::printf("filled %llu void samples in the inputs\n",
+                static_cast<unsigned long long>(report->voids_filled));
+  }
   if (args->has("--timings")) {
     for (const auto& [phase, seconds] : report->phase_seconds) {
       std::printf("  %-16s %8.3f s\n", phase.c_str(), seconds);

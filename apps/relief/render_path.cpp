@@ -170,21 +170,38 @@ json loader_json(const stream::LoaderStats& s) {
           {"prefetch_used", s.prefetch_used}};
 }
 
-// File bytes of the data tiles a selection draws (own and parent data).
-uint64_t view_bytes(const tiles::Store& store, lod::TerrainModel& terrain,
-                    const lod::Selection& selection) {
-  std::unordered_set<geo::TileKey, geo::TileKeyHash> tiles;
-  for (const tiles::IndexEntry& e : store.index(0).entries()) tiles.insert(e.key);
+using TileSet = std::unordered_set<geo::TileKey, geo::TileKeyHash>;
+
+// Adds the data tiles a selection draws (own and parent data) to `tiles`;
+// with `ancestors`, also the tiles above them, which a coarse-first loader
+// must have fetched before.
+void add_drawn(TileSet& tiles, lod::TerrainModel& terrain, const lod::Selection& selection,
+               bool ancestors) {
   for (const auto& q : selection.quads) {
     for (const auto& w : {terrain.window(q.key), terrain.parent_window(q.key)}) {
-      if (w.tile) tiles.insert(*w.tile);
+      if (!w.tile) continue;
+      for (std::optional<geo::TileKey> k = *w.tile; k; k = ancestors ? k->parent() : std::nullopt) {
+        if (!tiles.insert(*k).second && ancestors) break;  // its ancestors are in already
+      }
     }
   }
+}
+
+uint64_t file_bytes(const tiles::Store& store, const TileSet& tiles) {
   uint64_t bytes = 0;
   for (const auto& k : tiles) {
     if (const auto* e = store.index(k.level).find(k)) bytes += e->file_bytes;
   }
   return bytes;
+}
+
+// File bytes of the data tiles a selection draws, and of level 0.
+uint64_t view_bytes(const tiles::Store& store, lod::TerrainModel& terrain,
+                    const lod::Selection& selection) {
+  TileSet tiles;
+  for (const tiles::IndexEntry& e : store.index(0).entries()) tiles.insert(e.key);
+  add_drawn(tiles, terrain, selection, false);
+  return file_bytes(store, tiles);
 }
 
 }  // namespace
@@ -258,6 +275,7 @@ int render_path(const Args& args, RenderSetup& setup) {
   const auto start = Clock::now();
   lod::Camera previous = keys.front().camera;
   bool complete = false;
+  TileSet drawn;                // every data tile any frame drew, with its ancestors
   uint64_t imagery_misses = 0;  // a frame that missed imagery is not complete
   double settle_start = -1;
   lod::Selection last;
@@ -303,6 +321,7 @@ int render_path(const Args& args, RenderSetup& setup) {
     }
     terrain->end_frame();
     if (imagery_loader) imagery_loader->begin_frame();  // the renderer requests imagery
+    add_drawn(drawn, *terrain, *selection, true);
     auto frame = (*renderer)->draw(*view, *selection, **target, ro);
     if (imagery_loader) imagery_loader->end_frame();
     if (!frame) return report_error(frame.error().message);
@@ -393,6 +412,7 @@ int render_path(const Args& args, RenderSetup& setup) {
                   {"complete", complete},
                   {"bytes_fetched", ls.bytes_fetched},
                   {"final_view_bytes", view_bytes(store, *terrain, last)},
+                  {"drawn_bytes", file_bytes(store, drawn)},
                   {"loaded", ls.loaded},
                   {"failed", ls.failed},
                   {"cancelled", ls.cancelled},

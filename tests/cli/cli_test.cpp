@@ -71,6 +71,8 @@ TEST(Cli, BadArgumentsNameTheArgument) {
   expect_one_line_error(
       run_relief({"build", kPyrenees, "-o", out, "--kind", "elevation", "--border", "-2"}),
       "--border");
+  expect_one_line_error(
+      run_relief({"build", kPyrenees, "-o", out, "--kind", "sar", "--fill-voids"}), "--fill-voids");
   expect_one_line_error(run_relief({"build", kPyrenees, "-o", out}), "--kind");
   expect_one_line_error(run_relief({"build", kPyrenees, "--kind", "elevation"}), "-o");
   expect_one_line_error(run_relief({"build", "-o", out, "--kind", "elevation"}), "no input");

@@ -94,6 +94,16 @@ std::string still(const std::string& camera) {
                      camera);
 }
 
+// Every tile a frame draws was fetched, and little else: the bytes fetched
+// are within 10 % of the tiles drawn (with the ancestors they load after).
+void expect_fetches_only_what_is_drawn(const json& stats) {
+  const auto fetched = stats["summary"]["bytes_fetched"].get<double>();
+  const auto drawn = stats["summary"]["drawn_bytes"].get<double>();
+  EXPECT_GT(drawn, 0);
+  EXPECT_GE(fetched, drawn);
+  EXPECT_LE(fetched, 1.1 * drawn);
+}
+
 TEST_F(StreamingRenderTest, InteractiveFramesDoNotWaitAndConvergeToTheCompleteFrame) {
   const json s = render_path("interactive", still(kGround),
                              {"--simulate-latency", "300", "--until-complete", "60"});
@@ -158,8 +168,10 @@ double off_centre(const geo::TileKey& key, const lod::View& view) {
 }
 
 TEST_F(StreamingRenderTest, AncestorsAndTheScreenCentreLoadFirst) {
-  render_path("order", still("[1.5, 42.5, 12000, 0, -90, 0]"),
-              {"--simulate-latency", "40", "--loads", "2", "--until-complete", "60"});
+  const json s =
+      render_path("order", still("[1.5, 42.5, 12000, 0, -90, 0]"),
+                  {"--simulate-latency", "40", "--loads", "2", "--until-complete", "60"});
+  expect_fetches_only_what_is_drawn(s);
   const auto ev = events("order");
   std::map<std::string, size_t> started;
   std::vector<geo::TileKey> order;
@@ -205,6 +217,7 @@ TEST_F(StreamingRenderTest, ASuddenTurnCancelsStaleRequests) {
                   {"--simulate-latency", "150", "--loads", "2", "--until-complete", "60"});
   EXPECT_GT(s["summary"]["cancelled"].get<int>(), 0);
   EXPECT_TRUE(s["summary"]["complete"].get<bool>());
+  expect_fetches_only_what_is_drawn(s);  // cancelled before they were fetched
   ASSERT_EQ(s["summary"]["cuts"].size(), 1u);
   EXPECT_FALSE(s["summary"]["cuts"][0]["complete_after_s"].is_null());
 }

@@ -23,6 +23,7 @@
 #include "relief/tiles/store.h"
 #include "relief/tiles/store_layout.h"
 #include "source.h"
+#include "void_fill.h"
 #include "warp.h"
 
 namespace relief::ingest {
@@ -36,6 +37,25 @@ constexpr const char* kStateName = "state.json";
 constexpr int kMaxSupportedLevel = 24;
 
 // Everything that determines the output. A resumed build must match it exactly.
+// --fill-voids: sources with voids are read from filled copies in the build
+// directory (recomputed on resume: cheap next to warping).
+Result<uint64_t> fill_voids_of_sources(const BuildOptions& o, std::vector<Source>& sources,
+                                       Executor& executor) {
+  std::vector<std::optional<Result<std::optional<FilledSource>>>> done(sources.size());
+  executor.parallel_for(sources.size(), [&](size_t i) {
+    done[i] = fill_source_voids(sources[i].path,
+                                o.output / kBuildDir / "filled" / fmt::format("{}.tif", i));
+  });
+  uint64_t filled = 0;
+  for (size_t i = 0; i < sources.size(); ++i) {
+    const std::optional<FilledSource> f = RELIEF_TRY(std::move(*done[i]));
+    if (!f) continue;
+    sources[i].filled = f->path.string();
+    filled += f->filled;
+  }
+  return filled;
+}
+
 std::string fingerprint(const BuildOptions& o, const tiles::CodecOptions& codec, int min_level,
                         int max_level) {
   nlohmann::json j;
@@ -52,6 +72,7 @@ std::string fingerprint(const BuildOptions& o, const tiles::CodecOptions& codec,
   j["levels"] = {min_level, max_level};
   j["codec"] = {tiles::to_string(codec.codec), codec.max_error, codec.quality};
   j["tile"] = {o.tile_log2_height, o.border};
+  j["fill_voids"] = o.fill_voids;
   j["src_crs"] = o.src_crs.value_or("");
   j["warp_error"] = o.warp_error;
   j["direct"] = o.direct_resampling;
@@ -144,6 +165,9 @@ tiles::CodecOptions choose_codec(const BuildOptions& o) {
 Status validate_options(const BuildOptions& o, const tiles::CodecOptions& codec) {
   if (o.inputs.empty()) return fail("no input files given");
   if (o.output.empty()) return fail("-o: no output store given");
+  if (o.fill_voids && o.kind != tiles::DatasetKind::Elevation) {
+    return fail("--fill-voids: only for elevation (--kind elevation)");
+  }
   const tiles::SampleType type =
       o.kind == tiles::DatasetKind::Imagery ? tiles::SampleType::UInt8 : tiles::SampleType::Float32;
   if (!tiles::codec_supports(codec.codec, type)) {
@@ -509,9 +533,20 @@ Result<BuildReport> build_store(const BuildOptions& o, Executor& executor, Progr
   }
   const std::string print = fingerprint(o, codec, min_level, max_level);
   if (RELIEF_TRY(prepare_output(o, print))) RELIEF_CHECK(remove_temporary_files(o.output));
+  const auto start = std::chrono::steady_clock::now();
+  const uint64_t filled =
+      o.fill_voids ? RELIEF_TRY(fill_voids_of_sources(o, sources, executor)) : 0;
+  const double fill_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   Builder builder(o, std::move(sources), *grid, codec, min_level, max_level, memory, executor,
                   progress);
-  return builder.run();
+  BuildReport report = RELIEF_TRY(builder.run());
+  report.voids_filled = filled;
+  if (o.fill_voids) {
+    report.phase_seconds.insert(report.phase_seconds.begin(), {"voids", fill_seconds});
+    report.seconds += fill_seconds;
+  }
+  return report;
 }
 
 }  // namespace relief::ingest

@@ -22,6 +22,10 @@ struct Source {
   bool north_up = true;    // plain geotransform: no rotation terms, no GCPs
   geo::GeoBox box;         // lon/lat extent; east may exceed 180 if it crosses the antimeridian
   double spacing_deg = 0;  // sample spacing in degrees after reprojection
+  std::string filled;      // a copy with its voids filled (--fill-voids), if any
+
+  // The file the warper reads.
+  const std::string& open_path() const { return filled.empty() ? path : filled; }
 };
 
 // Opens `path` and checks that it can go into a dataset of `kind`.

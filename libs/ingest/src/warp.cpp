@@ -100,10 +100,10 @@ Result<GDALDatasetH> TileWarper::group_handle(size_t g) {
   const Source& first = sources_[group.members.front()];
   Dataset ds;
   if (group.members.size() == 1) {
-    ds = open_raster(first.path);
+    ds = open_raster(first.open_path());
   } else {
     std::vector<const char*> paths;
-    for (size_t m : group.members) paths.push_back(sources_[m].path.c_str());
+    for (size_t m : group.members) paths.push_back(sources_[m].open_path().c_str());
     // Keep the finest input resolution; later inputs are drawn on top.
     const char* argv[] = {"-resolution", "highest", nullptr};
     std::unique_ptr<GDALBuildVRTOptions, VrtOptionsDeleter> options(

@@ -2,6 +2,8 @@
 // `relief build`: turns rasters GDAL can read into a tile pyramid store.
 //
 // Phases (each parallel over tiles, each resumable after a crash):
+//  0. voids    with --fill-voids, elevation sources with holes are copied with
+//              the holes filled (void_fill.h)
 //  1. warp     every finest-level tile interior is resampled from the sources
 //              (GDAL warper; bilinear for elevation/SAR, cubic for imagery)
 //  2. pyramid  coarser interiors by nodata-aware 2 x 2 averaging
@@ -39,12 +41,14 @@ struct BuildOptions {
   std::optional<std::string> src_crs;  // for inputs without a CRS
   double warp_error = 0.125;      // approximate-transform error in source pixels (gdalwarp -et)
   bool direct_resampling = true;  // fast path for WGS84 lon/lat inputs (same result as GDAL)
+  bool fill_voids = false;        // elevation: fill nodata holes (see void_fill.h)
 };
 
 struct BuildReport {
   tiles::Manifest manifest;
   uint64_t tiles_written = 0;
   uint64_t tiles_resumed = 0;  // already present from an interrupted run
+  uint64_t voids_filled = 0;   // source samples filled by --fill-voids
   double seconds = 0;
   std::vector<std::pair<std::string, double>> phase_seconds;  // wall time per phase
 };
