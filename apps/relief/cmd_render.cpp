@@ -55,6 +55,7 @@ path options:
   --mode M           interactive (default) or complete
   --fps N            frames per second (default: the path's, else 30)
   --memory-budget SIZE  decoded tiles in memory (L2, default 512MiB)
+  --imagery-budget SIZE  decoded imagery tiles in memory (default 512MiB)
   --loads N          loads in flight (default 8)
   --no-prefetch      do not load ahead along the camera's motion
   --pager P          priority (default) or radius:K (every tile within K tile
@@ -160,6 +161,7 @@ int run_render(const std::vector<std::string>& argv) {
                            {"--mode"},
                            {"--fps"},
                            {"--memory-budget"},
+                           {"--imagery-budget"},
                            {"--loads"},
                            {"--no-prefetch", "", false},
                            {"--pager"},

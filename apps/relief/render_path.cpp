@@ -31,6 +31,7 @@ struct PathOptions {
   bool interactive = true;
   double fps = 0;  // 0: the path's
   stream::LoaderOptions loader;
+  uint64_t imagery_budget = uint64_t{512} << 20;  // the imagery loader's L2
   bool prefetch = true;
   double radius = 0;  // > 0: the radius pager
   double until_complete = 0;
@@ -51,10 +52,13 @@ Result<PathOptions> parse_path_options(const Args& args) {
     if (!(*fps > 0 && *fps <= 1000)) return fail("--fps: must be in (0, 1000]");
     o.fps = *fps;
   }
-  if (auto size = args.get("--memory-budget")) {
-    auto bytes = parse_byte_size(*size);
-    if (!bytes) return fail("--memory-budget: " + bytes.error().message);
-    o.loader.memory_budget = *bytes;
+  for (auto [name, budget] : {std::pair{"--memory-budget", &o.loader.memory_budget},
+                              std::pair{"--imagery-budget", &o.imagery_budget}}) {
+    if (auto size = args.get(name)) {
+      auto bytes = parse_byte_size(*size);
+      if (!bytes) return fail(fmt::format("{}: {}", name, bytes.error().message));
+      *budget = *bytes;
+    }
   }
   if (auto loads = RELIEF_TRY(args.get_int("--loads", 1, 256))) o.loader.max_in_flight = *loads;
   o.prefetch = !args.has("--no-prefetch");
@@ -233,7 +237,9 @@ int render_path(const Args& args, RenderSetup& setup) {
     loader = std::move(*l);
     terrain = std::make_unique<lod::TerrainModel>(store, mesh, *loader);
     if (setup.imagery) {
-      auto il = stream::TileLoader::create(*setup.imagery, options->loader);
+      stream::LoaderOptions io = options->loader;
+      io.memory_budget = options->imagery_budget;
+      auto il = stream::TileLoader::create(*setup.imagery, io);
       if (!il) return report_error(il.error().message);
       imagery_loader = std::move(*il);
     }

@@ -87,7 +87,7 @@ lod::SelectionOptions selection_options(const RenderSetup& setup) {
   lod::SelectionOptions so;
   so.pixel_error = setup.pixel_error;
   so.full_resolution = setup.full_resolution;
-  if (setup.imagery) so.texture_max_level = setup.imagery->manifest().max_level;
+  if (setup.imagery) so.texture = &*setup.imagery;
   return so;
 }
 

@@ -24,6 +24,7 @@ class Stores : public ::testing::Environment {
   static fs::path pyrenees() { return dir() / "pyrenees"; }
   static fs::path world() { return dir() / "world"; }
   static fs::path sar() { return dir() / "sar"; }
+  static fs::path landsat() { return dir() / "landsat"; }
   void SetUp() override {
     ASSERT_EQ(run_relief({"build", data("srtm/N41E001.hgt.zip"), data("srtm/N42E001.hgt.zip"),
                           "--kind", "elevation", "-o", pyrenees().string(), "-q"})
@@ -31,6 +32,10 @@ class Stores : public ::testing::Environment {
               0);
     ASSERT_EQ(run_relief({"build", data("imagery/world.rgb.tif"), "--kind", "imagery", "-o",
                           world().string(), "-q"})
+                  .exit_code,
+              0);
+    ASSERT_EQ(run_relief({"build", data("imagery/RGB.byte.tif"), "--kind", "imagery", "-o",
+                          landsat().string(), "-q"})
                   .exit_code,
               0);
   }
@@ -114,6 +119,28 @@ TEST(Render, GoldenImages) {
   expect_golden("globe_imagery",
                 {"--camera", "1.5,20,8000000,0,-90,0", "--imagery", Stores::world().string()}, 160,
                 120);
+}
+
+// Imagery finer than the terrain needs: over flat ground (the Bahamas, no
+// elevation data) the geometric error alone would keep quads at level 3 and
+// drape 20 km texels; quads split until a texel covers at most a pixel
+// (seed 003 §1.4.2 step 5). Where the imagery has no data the terrain shows
+// its own colours, not black.
+TEST(Render, DrapedImageryIsDrawnAtTheResolutionOfThePixels) {
+  ScratchDir dir("render_landsat");
+  const fs::path stats = dir / "s.json";
+  const Image img = render({"--camera", "-77.8,24.6,400000,0,-90,0", "--imagery",
+                            Stores::landsat().string(), "--stats", stats.string()},
+                           320, 240, dir / "f.png");
+  std::ifstream in(stats);
+  const auto j = nlohmann::json::parse(in);
+  // 320 x 240 at 60 degrees: 1 px is 1.9 km at 400 km; level-6 texels are
+  // 1.2 km, level-5 ones 2.4 km.
+  int deepest = 0;
+  for (const auto& [level, n] : j["quads_per_level"].items())
+    deepest = std::max(deepest, std::stoi(level));
+  EXPECT_GE(deepest, 6);
+  EXPECT_EQ(count_colour(img, 0, 0, 0), 0u);
 }
 
 TEST(Render, StatisticsDescribeTheFrame) {

@@ -139,13 +139,17 @@ TEST_F(StreamingRenderTest, InteractiveFramesDoNotWaitAndConvergeToTheCompleteFr
 }
 
 TEST_F(StreamingRenderTest, DrapedImageryStreamsToo) {
-  const json s = render_path(
-      "imagery", still(kGround),
-      {"--imagery", imagery().string(), "--simulate-latency", "300", "--until-complete", "60"});
+  const json s = render_path("imagery", still(kGround),
+                             {"--imagery", imagery().string(), "--simulate-latency", "300",
+                              "--until-complete", "60", "--imagery-budget", "3MiB"});
   const json& frames = s["frames"];
   ASSERT_GE(frames.size(), 3u);
   EXPECT_TRUE(s["summary"]["complete"].get<bool>());
-  for (const json& f : frames) EXPECT_LT(f["frame_ms"].get<double>(), 200) << f["frame"];
+  for (const json& f : frames) {
+    EXPECT_LT(f["frame_ms"].get<double>(), 200) << f["frame"];
+    EXPECT_EQ(f["imagery_memory"]["budget_bytes"].get<uint64_t>(), 3u << 20);
+    EXPECT_LE(f["imagery_memory"]["resident_bytes"].get<uint64_t>(), 3u << 20) << f["frame"];
+  }
   EXPECT_GT(frames.back()["imagery_memory"]["loaded"].get<int>(), 1);
   const fs::path ref = scratch("imagery-still.png");
   const RunResult r =

@@ -190,7 +190,7 @@ TEST_F(TileLoaderTest, FailuresAreReportedNotCachedAndRetriedLater) {
   auto store = tiles::Store::open(flaky);
   ASSERT_TRUE(store);
   stream::LoaderOptions o;
-  o.retry_failed_after = 0.2;
+  o.retry_failed_after = 0.3;
   auto loader = stream::TileLoader::create(*store, o);
   ASSERT_TRUE(loader);
   Recorder rec;
@@ -212,9 +212,23 @@ TEST_F(TileLoaderTest, FailuresAreReportedNotCachedAndRetriedLater) {
   (*loader)->end_frame();
   wait_idle(**loader);
   EXPECT_EQ((*loader)->stats().failed, 1u);
-  // The server recovers; after the pause the tile loads.
+  // After the pause it is tried again and fails again: the pause doubles.
+  std::this_thread::sleep_for(350ms);
+  (*loader)->begin_frame();
+  (*loader)->request(key, 1);
+  (*loader)->end_frame();
+  wait_idle(**loader);
+  EXPECT_EQ((*loader)->stats().failed, 2u);
+  std::this_thread::sleep_for(350ms);  // more than the first pause, less than the second
+  (*loader)->begin_frame();
+  (*loader)->request(key, 1);
+  (*loader)->end_frame();
+  wait_idle(**loader);
+  EXPECT_EQ((*loader)->stats().failed, 2u);
+  EXPECT_EQ((*loader)->state(key), TileState::Failed);
+  // The server recovers; after the longer pause the tile loads.
   flaky->healthy = true;
-  std::this_thread::sleep_for(250ms);
+  std::this_thread::sleep_for(300ms);
   (*loader)->begin_frame();
   (*loader)->request(key, 1);
   (*loader)->end_frame();

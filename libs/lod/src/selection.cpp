@@ -112,16 +112,18 @@ class Selector {
     const double d = distance_to(box, view_ref.eye);
     const double error = RELIEF_TRY(terrain_.quad_error(key, *info));
     leaf.error_pixels = d > 0 ? error * view_ref.pixels_per_radian / d : INFINITY;
-    // Up to the finest level of the data (or of the draped texture), a quad
-    // must also provide at least one sample per pixel it covers.
-    const int sample_max = std::max(terrain_.data_max_level(), o_.texture_max_level);
-    if (key.level < sample_max && d > 0) {
+    // Up to the finest level of the data (and of the draped texture), a quad
+    // must also provide at least one sample per pixel it covers (seed 003
+    // §1.4.2 step 5): shading and imagery are sampled per pixel from them.
+    auto coarser_than_pixels = [&](const tiles::Store& s) {
+      if (key.level >= s.manifest().max_level || !s.has_tile(key)) return false;
       const double spacing = 2 * 3.14159265358979323846 * geo::wgs84::kSemiMajorAxis /
-                             std::ldexp(terrain_.tile_width(), key.level);
-      leaf.split_for_samples = spacing * view_ref.pixels_per_radian / d > 1;
-    } else if (key.level < sample_max) {
-      leaf.split_for_samples = true;
-    }
+                             std::ldexp(s.grid().width(), key.level);
+      return d <= 0 || spacing * view_ref.pixels_per_radian / d > 1;
+    };
+    const tiles::Store* data = terrain_.store();
+    leaf.split_for_samples =
+        (data && coarser_than_pixels(*data)) || (o_.texture && coarser_than_pixels(*o_.texture));
     return leaf;
   }
 
@@ -219,7 +221,8 @@ class Selector {
     }
     if (key.level + 1 > terrain_.data_max_level()) return {};
     const Leaf leaf = RELIEF_TRY(assess(key));
-    if (!leaf.visible || leaf.error_pixels <= o_.pixel_error) return {};
+    if (!leaf.visible || (leaf.error_pixels <= o_.pixel_error && !leaf.split_for_samples))
+      return {};
     for (int c = 0; c < 4; ++c) {
       const TileKey child = key.child(c & 1, c >> 1);
       const DataWindow w = terrain_.window(child);
@@ -239,8 +242,8 @@ class Selector {
           fmt::format("level of detail: more than {} quads; raise --pixel-error", o_.max_quads));
     }
     const Leaf leaf = RELIEF_TRY(assess(key));
-    bool split =
-        leaf.visible && key.level < terrain_.max_level() && leaf.error_pixels > o_.pixel_error;
+    bool split = leaf.visible && key.level < terrain_.max_level() &&
+                 (leaf.error_pixels > o_.pixel_error || leaf.split_for_samples);
     if (split) split = RELIEF_TRY(children_available(key));
     if (!split) {
       leaves_.set(key, leaf);

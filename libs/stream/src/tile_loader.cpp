@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cassert>
 #include <chrono>
+#include <cmath>
 #include <condition_variable>
 #include <list>
 #include <mutex>
@@ -29,6 +30,7 @@ struct Entry {
   bool permanent = false;            // level 0
   bool prefetch = false;             // loaded for a predicted view, not drawn yet
   Clock::time_point failed_at;
+  uint32_t failures = 0;  // in a row, reset by a load
 };
 
 struct Request {
@@ -148,6 +150,13 @@ struct TileLoader::Impl {
     return r;
   }
 
+  // Backoff: the pause before a failed tile loads again.
+  double retry_pause(const Entry& e) const {
+    const int doublings = static_cast<int>(std::min<uint32_t>(e.failures, 32)) - 1;
+    return std::min(options.retry_failed_max,
+                    std::ldexp(options.retry_failed_after, std::max(0, doublings)));
+  }
+
   void work() {
     std::unique_lock lock(mutex);
     for (;;) {
@@ -168,10 +177,12 @@ struct TileLoader::Impl {
       if (!tile) {
         ++counters.failed;
         done.failed_at = Clock::now();
+        ++done.failures;
         move(r.key, done, TileState::Failed,
              {TileEventKind::Failed, r.key, 0, r.prefetch, tile.error().message});
         continue;
       }
+      done.failures = 0;
       counters.bytes_fetched += ie ? ie->file_bytes : 0;
       ++counters.loaded;
       if (r.prefetch) ++counters.prefetched;
@@ -278,8 +289,7 @@ void TileLoader::end_frame() {
     for (const auto& [key, r] : m.frame_requests) {
       Entry& e = m.entries[key];
       if (e.state == TileState::Failed &&
-          std::chrono::duration<double>(now - e.failed_at).count() >=
-              m.options.retry_failed_after) {
+          std::chrono::duration<double>(now - e.failed_at).count() >= m.retry_pause(e)) {
         m.move(key, e, TileState::Absent, {TileEventKind::Evicted, key, 0, r.prefetch, {}});
       }
       if (e.state == TileState::Absent) {

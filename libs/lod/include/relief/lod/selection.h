@@ -19,10 +19,10 @@ namespace relief::lod {
 
 struct SelectionOptions {
   double pixel_error = 1.0;  // largest allowed screen-space error, pixels
-  // Finest level of a draped texture: up to it (and up to the elevation
-  // data's finest level) quads also split while a sample covers more than a
-  // pixel (seed 003 §1.4.2, step 5).
-  int texture_max_level = -1;
+  // A draped texture (imagery store), or null. Where the elevation data or
+  // the texture has a tile, a quad also splits while one of its samples
+  // covers more than a pixel (seed 003 §1.4.2, step 5).
+  const tiles::Store* texture = nullptr;
   // Every quad with data at the deepest level instead, nothing else (with a
   // mesh of one vertex per sample: the brute-force reference).
   bool full_resolution = false;

@@ -50,6 +50,7 @@ class TerrainModel {
   TerrainModel(const tiles::Store& store, const MeshTopology& mesh, TileProvider& provider);
 
   const MeshTopology& mesh() const { return mesh_; }
+  const tiles::Store* store() const { return store_; }  // null: the bare ellipsoid
   int data_max_level() const { return data_max_; }
   int max_level() const { return max_level_; }
   int tile_width() const { return width_; }

@@ -36,7 +36,11 @@ namespace relief::stream {
 struct LoaderOptions {
   int max_in_flight = 8;                         // worker threads
   uint64_t memory_budget = uint64_t{256} << 20;  // resident decoded bytes
-  double retry_failed_after = 2.0;               // seconds before a failed tile may load again
+  // A failed tile may load again after this pause, doubled after each further
+  // failure of the same tile up to retry_failed_max (a dead server is not
+  // hammered; a recovered one is used again soon).
+  double retry_failed_after = 2.0;  // seconds
+  double retry_failed_max = 60.0;   // seconds
 };
 
 struct LevelUse {
