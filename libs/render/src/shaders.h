@@ -86,11 +86,12 @@ void main() {
   vec3 n = normalize(vec3(-dx * exaggeration, dy * exaggeration, 1.0));  // east, north, up (rows run south)
   vec3 sun = normalize(vec3(-1.0, 1.0, 1.414));
   float shade = clamp(dot(n, sun), 0.0, 1.0);
-  // Where the imagery has no data (alpha 0) the terrain shows its own colours.
+  // Where the imagery has no data (alpha 0) the terrain shows its own colours
+  // (imagery colours are premultiplied by alpha).
   vec4 drape = has_imagery != 0
                    ? texture(imagery, (imagery_position + float(imagery_border)) / vec2(textureSize(imagery, 0)))
                    : vec4(0.0);
-  vec3 base = mix(hypsometric(height), drape.rgb, drape.a);
+  vec3 base = hypsometric(height) * (1.0 - drape.a) + drape.rgb;
   float light = mix(0.35 + 0.65 * shade, 0.75 + 0.25 * shade, drape.a);
   colour = vec4(base * light, 1.0);
 }
