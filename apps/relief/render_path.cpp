@@ -357,7 +357,10 @@ int render_path(const Args& args, RenderSetup& setup) {
                 {"budget_bytes", frame->gpu_budget},
                 {"uploads", frame->uploads},
                 {"evicted", frame->gpu_evicted}}},
-              {"rss_bytes", resident_set_bytes()}};
+              {"rss_bytes", resident_set_bytes()},
+              {"exact_errors",
+               {{"measured", terrain->error_counts().measured},
+                {"prepared", terrain->error_counts().prepared}}}};
     if (loader) f["memory"] = loader_json(loader->stats());
     if (setup.disk_cache) {
       const net::DiskCacheStats d = setup.disk_cache->stats();

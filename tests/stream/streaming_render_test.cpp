@@ -115,6 +115,10 @@ TEST_F(StreamingRenderTest, InteractiveFramesDoNotWaitAndConvergeToTheCompleteFr
     // A tile takes 300 ms to arrive; no frame waits for one.
     EXPECT_LT(f["frame_ms"].get<double>(), 200) << f["frame"];
   }
+  // The exact mesh errors of the finest tiles' quads were measured by the
+  // loader's threads as the tiles arrived, none on the render thread.
+  EXPECT_EQ(frames.back()["exact_errors"]["measured"].get<int>(), 0);
+  EXPECT_GT(frames.back()["exact_errors"]["prepared"].get<int>(), 0);
   // Every frame, the first included (level-0 data only), covers the ground: no holes.
   for (size_t i = 0; i < frames.size(); i += std::max<size_t>(1, frames.size() / 6)) {
     EXPECT_EQ(count_colour(frame("interactive", i), 255, 0, 255), 0u) << i;

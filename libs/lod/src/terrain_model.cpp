@@ -3,9 +3,12 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <mutex>
+#include <optional>
 
 #include <fmt/format.h>
 
+#include "mesh_error.h"
 #include "relief/geo/ellipsoid.h"
 #include "relief/lod/camera.h"
 
@@ -23,15 +26,6 @@ constexpr double kPi = 3.14159265358979323846;
 
 HeightRange unite(HeightRange a, HeightRange b) {
   return {std::min(a.lo, b.lo), std::max(a.hi, b.hi)};
-}
-
-// Height at (a, b) in [0,1]^2 of a triangle with local vertices p[3] and heights h[3].
-double interpolate(double a, double b, const double (*p)[2], const double* h) {
-  const double d =
-      (p[1][0] - p[0][0]) * (p[2][1] - p[0][1]) - (p[2][0] - p[0][0]) * (p[1][1] - p[0][1]);
-  const double s = ((a - p[0][0]) * (p[2][1] - p[0][1]) - (p[2][0] - p[0][0]) * (b - p[0][1])) / d;
-  const double t = ((p[1][0] - p[0][0]) * (b - p[0][1]) - (a - p[0][0]) * (p[1][1] - p[0][1])) / d;
-  return h[0] * (1 - s - t) + h[1] * s + h[2] * t;
 }
 
 // An axis-aligned ECEF box around the quad's surface between its lowest and
@@ -73,7 +67,9 @@ TerrainModel::TerrainModel(const tiles::Store* store, const MeshTopology& mesh,
 
 TerrainModel::TerrainModel(const tiles::Store& store, const MeshTopology& mesh,
                            TileProvider& provider)
-    : TerrainModel(&store, mesh, nullptr, &provider) {}
+    : TerrainModel(&store, mesh, nullptr, &provider) {
+  if (!provider.blocking()) prepare_errors_on_load();
+}
 
 TerrainModel::TerrainModel(const tiles::Store* store, const MeshTopology& mesh,
                            std::unique_ptr<TileProvider> owned, TileProvider* provider)
@@ -248,82 +244,73 @@ Result<double> TerrainModel::mesh_error(const geo::TileKey& key) {
   return error;
 }
 
-// max |mesh - data| over the finest samples of the quad, for the plain and the
-// split border triangles; at the store's finest level also the largest change
-// of an edge vertex that takes the coarser parent data.
+struct TerrainModel::PreparedErrors {
+  std::mutex mutex;
+  std::unordered_map<geo::TileKey, double, geo::TileKeyHash> errors;
+};
+
+// max |mesh - data| over the finest samples of the quad (measured by the
+// loader's threads when they prepared it); at the store's finest level plus
+// the largest change of an edge vertex that takes the coarser parent data.
 Result<double> TerrainModel::exact_mesh_error(const geo::TileKey& key) {
   const DataWindow w = window(key);
   if (!w.tile) return 0.0;
   const TilePtr t = RELIEF_TRY(tile(*w.tile));
-  const MeshTopology& m = mesh_;
-  const int nx = m.squares_x(), ny = m.squares_y();
-  std::vector<double> vh(m.vertices().size());
-  for (size_t i = 0; i < vh.size(); ++i) {
-    const MeshVertex& v = m.vertices()[i];
-    vh[i] = bilinear(*t, border_, w.x0 + v.u * w.width, w.y0 + v.v * w.height);
+  std::optional<double> worst;
+  if (prepared_) {
+    std::lock_guard lock(prepared_->mutex);
+    if (auto it = prepared_->errors.find(key); it != prepared_->errors.end()) worst = it->second;
   }
-  double worst = 0;
-  const int i0 = static_cast<int>(w.x0), j0 = static_cast<int>(w.y0);
-  const int iw = static_cast<int>(w.width), jh = static_cast<int>(w.height);
-  const auto data = t->f32();
-  static constexpr double kC[2] = {0.5, 0.5};
-  for (int j = j0; j < j0 + jh; ++j) {
-    for (int i = i0; i < i0 + iw; ++i) {
-      const double value = data[static_cast<size_t>(j + border_) * t->width() + i + border_];
-      const double u = (i + 0.5 - w.x0) / w.width * nx, v = (j + 0.5 - w.y0) / w.height * ny;
-      const int si = std::min(nx - 1, static_cast<int>(u)),
-                sj = std::min(ny - 1, static_cast<int>(v));
-      const double a = u - si, b = v - sj;
-      const double hc = vh[m.centre_vertex(si, sj)];
-      const double hnw = vh[m.corner_vertex(si, sj)], hne = vh[m.corner_vertex(si + 1, sj)];
-      const double hsw = vh[m.corner_vertex(si, sj + 1)], hse = vh[m.corner_vertex(si + 1, sj + 1)];
-      // The triangle of the square containing (a, b), and its side if on the border.
-      double p[3][2], h[3];
-      int side = 0, k = 0;
-      double mid[2];
-      if (b <= a && b <= 1 - a) {
-        p[0][0] = 0, p[0][1] = 0, p[1][0] = 1, p[1][1] = 0, h[0] = hnw, h[1] = hne;
-        side = sj == 0 ? kNorth : 0, k = si, mid[0] = 0.5, mid[1] = 0;
-      } else if (a >= b && a >= 1 - b) {
-        p[0][0] = 1, p[0][1] = 0, p[1][0] = 1, p[1][1] = 1, h[0] = hne, h[1] = hse;
-        side = si == nx - 1 ? kEast : 0, k = sj, mid[0] = 1, mid[1] = 0.5;
-      } else if (b >= a && b >= 1 - a) {
-        p[0][0] = 1, p[0][1] = 1, p[1][0] = 0, p[1][1] = 1, h[0] = hse, h[1] = hsw;
-        side = sj == ny - 1 ? kSouth : 0, k = si, mid[0] = 0.5, mid[1] = 1;
-      } else {
-        p[0][0] = 0, p[0][1] = 1, p[1][0] = 0, p[1][1] = 0, h[0] = hsw, h[1] = hnw;
-        side = si == 0 ? kWest : 0, k = sj, mid[0] = 0, mid[1] = 0.5;
-      }
-      p[2][0] = kC[0], p[2][1] = kC[1], h[2] = hc;
-      worst = std::max(worst, std::abs(interpolate(a, b, p, h) - value));
-      if (side) {  // the split variant: two triangles through the side's midpoint
-        const double hm = vh[m.side_midpoint(side, k)];
-        double q[3][2] = {{p[0][0], p[0][1]}, {mid[0], mid[1]}, {kC[0], kC[1]}};
-        double hq[3] = {h[0], hm, hc};
-        const bool first_half = (a - p[0][0]) * (a - p[0][0]) + (b - p[0][1]) * (b - p[0][1]) <=
-                                (a - p[1][0]) * (a - p[1][0]) + (b - p[1][1]) * (b - p[1][1]);
-        if (!first_half) {
-          q[0][0] = mid[0], q[0][1] = mid[1], q[1][0] = p[1][0], q[1][1] = p[1][1];
-          hq[0] = hm, hq[1] = h[1];
-        }
-        worst = std::max(worst, std::abs(interpolate(a, b, q, hq) - value));
-      }
-    }
+  if (worst) {
+    ++error_counts_.prepared;
+  } else {
+    worst = mesh_sample_error(mesh_, *t, border_, w);
+    ++error_counts_.measured;
   }
   if (key.level == data_max_ && key.level > 0) {
     const DataWindow pw = parent_window(key);
     const TilePtr pt = pw.tile ? RELIEF_TRY(tile(*pw.tile)) : TilePtr{};
     double edge = 0;
-    for (size_t i = 0; i < vh.size(); ++i) {
-      const MeshVertex& v = m.vertices()[i];
+    for (const MeshVertex& v : mesh_.vertices()) {
       if (!v.sides) continue;
+      const double own = bilinear(*t, border_, w.x0 + v.u * w.width, w.y0 + v.v * w.height);
       const double hp =
           pt ? bilinear(*pt, border_, pw.x0 + v.u * pw.width, pw.y0 + v.v * pw.height) : 0.0;
-      edge = std::max(edge, std::abs(hp - vh[i]));
+      edge = std::max(edge, std::abs(hp - own));
     }
-    worst += edge;
+    *worst += edge;
   }
-  return worst;
+  return *worst;
+}
+
+void TerrainModel::prepare_errors_on_load() {
+  prepared_ = std::make_shared<PreparedErrors>();
+  // The hook runs on the loader's threads and may outlive this model: it
+  // holds copies of what it needs, never `this`.
+  provider_->set_prepare([prepared = prepared_, mesh = mesh_, border = border_,
+                          data_max = data_max_, max_level = max_level_, width = width_,
+                          height = height_](const geo::TileKey& key, const tiles::Raster& tile) {
+    if (key.level != data_max) return;
+    std::vector<std::pair<geo::TileKey, double>> errors;
+    for (int m = 0; m <= max_level - data_max; ++m) {
+      DataWindow w{key, 0, 0, std::ldexp(width, -m), std::ldexp(height, -m)};
+      for (uint32_t y = 0; y < (1u << m); ++y) {
+        for (uint32_t x = 0; x < (1u << m); ++x) {
+          w.x0 = x * w.width;
+          w.y0 = y * w.height;
+          const geo::TileKey quad{key.level + m, (key.x << m) + x, (key.y << m) + y};
+          errors.emplace_back(quad, mesh_sample_error(mesh, tile, border, w));
+        }
+      }
+    }
+    std::lock_guard lock(prepared->mutex);
+    if (prepared->errors.size() > kMaxCachedQuads) prepared->errors.clear();
+    prepared->errors.insert(errors.begin(), errors.end());
+  });
+}
+
+TerrainModel::~TerrainModel() {
+  if (prepared_) provider_->set_prepare({});
 }
 
 }  // namespace relief::lod

@@ -91,6 +91,7 @@ struct TileLoader::Impl {
   // Render thread only.
   std::unordered_map<TileKey, Request, geo::TileKeyHash> frame_requests;
   std::vector<std::function<void(const TileEvent&)>> listeners;
+  std::shared_ptr<const lod::TileProvider::Prepare> prepare;  // run by workers after decoding
   std::vector<std::thread> workers;
 
   Impl(const tiles::Store& s, const LoaderOptions& o) : store(s), options(o) {}
@@ -167,8 +168,10 @@ struct TileLoader::Impl {
       move(r.key, e, TileState::Loading, {TileEventKind::Started, r.key, 0, r.prefetch, {}});
       ++in_flight;
       prefetch_in_flight += r.prefetch;
+      const auto prepare_tile = prepare;
       lock.unlock();
       Result<lod::TilePtr> tile = lod::decode_tile(store, r.key);
+      if (tile && prepare_tile && *prepare_tile) (*prepare_tile)(r.key, **tile);
       const tiles::IndexEntry* ie = store.index(r.key.level).find(r.key);
       lock.lock();
       --in_flight;
@@ -303,6 +306,11 @@ void TileLoader::end_frame() {
     });
   }
   m.wake.notify_all();
+}
+
+void TileLoader::set_prepare(Prepare prepare) {
+  std::lock_guard lock(impl_->mutex);
+  impl_->prepare = std::make_shared<const Prepare>(std::move(prepare));
 }
 
 void TileLoader::subscribe(std::function<void(const TileEvent&)> listener) {

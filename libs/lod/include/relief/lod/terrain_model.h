@@ -48,6 +48,9 @@ class TerrainModel {
   // Tiles come from `provider` (which must outlive the model); with a
   // non-blocking one, selection draws only what is resident (interactive frames).
   TerrainModel(const tiles::Store& store, const MeshTopology& mesh, TileProvider& provider);
+  ~TerrainModel();
+  TerrainModel(const TerrainModel&) = delete;
+  TerrainModel& operator=(const TerrainModel&) = delete;
 
   const MeshTopology& mesh() const { return mesh_; }
   const tiles::Store* store() const { return store_; }  // null: the bare ellipsoid
@@ -99,6 +102,14 @@ class TerrainModel {
   // exactly as the renderer's vertex shader computes it.
   static float bilinear(const tiles::Raster& bordered, int border, double x, double y);
 
+  // Exact errors of quads at and below the store's finest level: how many
+  // were measured on this (the render) thread and how many came prepared by
+  // the loader's threads (non-blocking providers).
+  struct ErrorCounts {
+    uint64_t measured = 0, prepared = 0;
+  };
+  ErrorCounts error_counts() const { return error_counts_; }
+
  private:
   // Per-quad bounds kept between frames (~200 bytes each).
   static constexpr size_t kMaxCachedQuads = 200000;
@@ -110,6 +121,11 @@ class TerrainModel {
   Result<double> mesh_error(const geo::TileKey& key);
   Result<HeightRange> subtree_range(const geo::TileKey& key);
   Result<double> exact_mesh_error(const geo::TileKey& key);
+  // Has the provider measure the exact errors of every quad of a finest tile
+  // on its own threads when it decodes the tile.
+  void prepare_errors_on_load();
+
+  struct PreparedErrors;  // shared with the provider's threads
 
   const tiles::Store* store_;
   const MeshTopology& mesh_;
@@ -119,6 +135,8 @@ class TerrainModel {
   std::unordered_map<geo::TileKey, TilePtr, geo::TileKeyHash> pinned_;  // this frame's
   std::unordered_map<geo::TileKey, HeightRange, geo::TileKeyHash> subtree_;
   std::unordered_map<geo::TileKey, QuadInfo, geo::TileKeyHash> quads_;
+  std::shared_ptr<PreparedErrors> prepared_;  // null: blocking provider
+  ErrorCounts error_counts_;
 };
 
 }  // namespace relief::lod

@@ -6,6 +6,7 @@
 // frames use one that never waits (libs/stream): a tile that is not resident
 // is requested with the view priority of the quad that wants it, and the
 // selection keeps drawing that quad's resident ancestor meanwhile.
+#include <functional>
 #include <memory>
 
 #include "relief/base/result.h"
@@ -35,6 +36,11 @@ class TileProvider {
   // The bracket of one frame's requests.
   virtual void begin_frame() {}
   virtual void end_frame() {}
+  // Work to do on each freshly decoded tile, on the thread that decoded it,
+  // before the tile becomes resident (non-blocking providers; others never
+  // call it). An empty function removes it.
+  using Prepare = std::function<void(const geo::TileKey&, const tiles::Raster&)>;
+  virtual void set_prepare(Prepare /*prepare*/) {}
 };
 
 // Reads each tile from the store when asked, keeping decoded tiles within a

@@ -71,6 +71,7 @@ class TileLoader final : public lod::TileProvider {
   void request(const geo::TileKey& key, double priority) override;
   void begin_frame() override;
   void end_frame() override;
+  void set_prepare(Prepare prepare) override;
 
   // While set, requests are prefetch: ranked after the current view's.
   void set_prefetch(bool on) { prefetching_ = on; }
