@@ -36,7 +36,6 @@ constexpr const char* kBuildDir = ".build";
 constexpr const char* kStateName = "state.json";
 constexpr int kMaxSupportedLevel = 24;
 
-// Everything that determines the output. A resumed build must match it exactly.
 // --fill-voids: sources with voids are read from filled copies in the build
 // directory (recomputed on resume: cheap next to warping).
 Result<uint64_t> fill_voids_of_sources(const BuildOptions& o, std::vector<Source>& sources,
@@ -56,6 +55,7 @@ Result<uint64_t> fill_voids_of_sources(const BuildOptions& o, std::vector<Source
   return filled;
 }
 
+// Everything that determines the output. A resumed build must match it exactly.
 std::string fingerprint(const BuildOptions& o, const tiles::CodecOptions& codec, int min_level,
                         int max_level) {
   nlohmann::json j;

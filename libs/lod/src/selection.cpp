@@ -116,10 +116,10 @@ class Selector {
     // must also provide at least one sample per pixel it covers (seed 003
     // §1.4.2 step 5): shading and imagery are sampled per pixel from them.
     auto coarser_than_pixels = [&](const tiles::Store& s) {
-      if (key.level >= s.manifest().max_level || !s.has_tile(key)) return false;
+      if (key.level >= s.manifest().max_level) return false;
       const double spacing = 2 * 3.14159265358979323846 * geo::wgs84::kSemiMajorAxis /
                              std::ldexp(s.grid().width(), key.level);
-      return d <= 0 || spacing * view_ref.pixels_per_radian / d > 1;
+      return (d <= 0 || spacing * view_ref.pixels_per_radian / d > 1) && s.has_tile(key);
     };
     const tiles::Store* data = terrain_.store();
     leaf.split_for_samples =

@@ -48,6 +48,14 @@ Result<TilePtr> decode_heights(const tiles::Store& store, const geo::TileKey& ke
 Result<TilePtr> decode_tile(const tiles::Store& store, const geo::TileKey& key) {
   if (store.manifest().sample_type == tiles::SampleType::Float32) return decode_heights(store, key);
   tiles::Tile t = RELIEF_TRY(store.read_tile(key));
+  // Colours premultiplied by alpha, so that linear filtering at the edge of
+  // the data blends towards what is drawn beneath, not towards black.
+  auto px = t.raster.u8();
+  for (size_t p = 0; p + 3 < px.size(); p += 4) {
+    const unsigned a = px[p + 3];
+    if (a == 255) continue;
+    for (size_t c = 0; c < 3; ++c) px[p + c] = static_cast<uint8_t>((px[p + c] * a + 127) / 255);
+  }
   return std::make_shared<const tiles::Raster>(std::move(t.raster));
 }
 

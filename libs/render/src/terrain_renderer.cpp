@@ -3,7 +3,6 @@
 #include <chrono>
 #include <cmath>
 #include <unordered_map>
-#include <vector>
 
 #include <fmt/format.h>
 
@@ -49,19 +48,6 @@ void view_projection(const lod::View& v, float out[16]) {
       out[c * 4 + r] = static_cast<float>(s);
     }
   }
-}
-
-// Imagery with colours premultiplied by alpha, so that linear filtering at
-// the edge of the data blends towards the terrain, not towards black.
-std::vector<uint8_t> premultiplied(const tiles::Raster& rgba) {
-  const auto in = rgba.u8();
-  std::vector<uint8_t> out(in.begin(), in.end());
-  for (size_t p = 0; p + 3 < out.size(); p += 4) {
-    const unsigned a = out[p + 3];
-    if (a == 255) continue;
-    for (size_t c = 0; c < 3; ++c) out[p + c] = static_cast<uint8_t>((out[p + c] * a + 127) / 255);
-  }
-  return out;
 }
 
 // A linear-filtered, edge-clamped 2-D texture holding `pixels`.
@@ -302,9 +288,8 @@ class GlTerrainRenderer final : public TerrainRenderer {
         if (auto t = textures_.find({a, true})) {
           texture = *t;
         } else if (const lod::TilePtr tile = RELIEF_TRY(imagery_tiles_->get(a))) {
-          const std::vector<uint8_t> rgba = premultiplied(*tile);
           texture = make_texture(GL_RGBA8, tile->width(), tile->height(), GL_RGBA, GL_UNSIGNED_BYTE,
-                                 rgba.data());
+                                 tile->u8().data());  // premultiplied by decode_tile
           textures_.insert({a, true}, texture, tile->byte_size());
         } else if (a.level == finest) {
           imagery_tiles_->request(a, quad.priority);

@@ -50,7 +50,8 @@ std::unique_ptr<TileProvider> blocking_provider(const tiles::Store& store, uint6
 // A store tile as heights: Float32 samples with NaN (nodata) replaced by 0;
 // an error naming the store for anything else.
 Result<TilePtr> decode_heights(const tiles::Store& store, const geo::TileKey& key);
-// A store tile ready to draw: heights as above, imagery (RGBA8) as stored.
+// A store tile ready to draw: heights as above, imagery (RGBA8) with its
+// colours premultiplied by alpha.
 Result<TilePtr> decode_tile(const tiles::Store& store, const geo::TileKey& key);
 
 }  // namespace relief::lod
