@@ -5,7 +5,6 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <thread>
 #include <unordered_set>
 
 #include <fmt/format.h>
@@ -24,7 +23,6 @@ namespace relief::cli {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
 using nlohmann::json;
 
 struct PathOptions {
@@ -210,7 +208,7 @@ uint64_t view_bytes(const tiles::Store& store, lod::TerrainModel& terrain,
 
 }  // namespace
 
-int render_path(const Args& args, RenderSetup& setup) {
+int render_path(const Args& args, RenderSetup& setup, const Clock& clock) {
   auto options = parse_path_options(args);
   if (!options) return report_error(options.error().message);
   if (setup.full_resolution) return report_error("--full-resolution: for stills only, not --path");
@@ -218,6 +216,8 @@ int render_path(const Args& args, RenderSetup& setup) {
   if (!path) return report_error(path.error().message);
   const auto& [keys, path_fps] = *path;
   const double fps = options->fps > 0 ? options->fps : path_fps;
+  const double duration = keys.back().time - keys.front().time;
+  const size_t path_frames = static_cast<size_t>(std::floor(duration * fps + 1e-9)) + 1;
   const std::string out = *args.get("--output");
   if (options->frames) {
     std::error_code ec;
@@ -269,8 +269,6 @@ int render_path(const Args& args, RenderSetup& setup) {
   ro.sky = setup.sky;
   const lod::SelectionOptions so = selection_options(setup);
 
-  const double duration = keys.back().time - keys.front().time;
-  const size_t path_frames = static_cast<size_t>(std::floor(duration * fps + 1e-9)) + 1;
   const double lookahead = 0.5 * fps;  // prefetch half a second ahead
   json frames = json::array();
   std::vector<double> frame_ms, cpu_ms;
@@ -278,7 +276,7 @@ int render_path(const Args& args, RenderSetup& setup) {
   for (size_t k = 1; k < keys.size(); ++k) {
     if (keys[k].cut) cuts.emplace_back(0, keys[k].time);
   }
-  const auto start = Clock::now();
+  const auto start = clock.now();
   lod::Camera previous = keys.front().camera;
   bool complete = false;
   TileSet drawn;                // every data tile any frame drew, with its ancestors
@@ -289,12 +287,9 @@ int render_path(const Args& args, RenderSetup& setup) {
     const bool on_path = frame_index < path_frames;
     if (!on_path) {
       if (!options->interactive || complete) break;
-      if (settle_start < 0)
-        settle_start = std::chrono::duration<double>(Clock::now() - start).count();
-      if (std::chrono::duration<double>(Clock::now() - start).count() - settle_start >
-          options->until_complete) {
-        break;
-      }
+      const double now = seconds_between(start, clock.now());
+      if (settle_start < 0) settle_start = now;
+      if (now - settle_start >= options->until_complete) break;
     }
     const double t =
         keys.front().time + static_cast<double>(std::min(frame_index, path_frames - 1)) / fps;
@@ -302,7 +297,7 @@ int render_path(const Args& args, RenderSetup& setup) {
     auto view = lod::make_view(camera);
     if (!view) return report_error(fmt::format("frame {}: {}", frame_index, view.error().message));
 
-    const auto frame_start = Clock::now();
+    const auto frame_start = clock.now();
     terrain->begin_frame();
     auto selection = lod::select_quads(*view, *terrain, so);
     if (!selection) return report_error(selection.error().message);
@@ -331,7 +326,7 @@ int render_path(const Args& args, RenderSetup& setup) {
     auto frame = (*renderer)->draw(*view, *selection, **target, ro);
     if (imagery_loader) imagery_loader->end_frame();
     if (!frame) return report_error(frame.error().message);
-    const double ms = std::chrono::duration<double>(Clock::now() - frame_start).count() * 1e3;
+    const double ms = seconds_between(frame_start, clock.now()) * 1e3;
     complete = selection->stats.waiting == 0;
     frame_ms.push_back(ms);
     cpu_ms.push_back(ms - frame->gpu_seconds * 1e3);
@@ -340,7 +335,7 @@ int render_path(const Args& args, RenderSetup& setup) {
     }
 
     json f = {{"frame", frame_index},
-              {"time", std::chrono::duration<double>(frame_start - start).count()},
+              {"time", seconds_between(start, frame_start)},
               {"camera",
                {camera.lon, camera.lat, camera.height, camera.heading, camera.pitch, camera.roll}},
               {"frame_ms", ms},
@@ -390,8 +385,8 @@ int render_path(const Args& args, RenderSetup& setup) {
     last = std::move(*selection);
     previous = camera;
     if (options->interactive) {  // real time: the next frame is due 1/fps after this one
-      std::this_thread::sleep_until(frame_start + std::chrono::duration_cast<Clock::duration>(
-                                                      std::chrono::duration<double>(1 / fps)));
+      clock.sleep_until(frame_start + std::chrono::duration_cast<Clock::Duration>(
+                                          std::chrono::duration<double>(1 / fps)));
     }
   }
 

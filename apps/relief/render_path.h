@@ -1,10 +1,12 @@
 #pragma once
 #include "args.h"
+#include "relief/base/clock.h"
 #include "render_setup.h"
 
 namespace relief::cli {
 
 // `relief render --path`: a camera path frame by frame, interactive or complete.
-int render_path(const Args& args, RenderSetup& setup);
+// Frames are paced and timed on `clock`.
+int render_path(const Args& args, RenderSetup& setup, const Clock& clock = steady_clock());
 
 }  // namespace relief::cli

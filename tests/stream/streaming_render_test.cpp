@@ -1,6 +1,12 @@
-// `relief render --path`: interactive frames that never wait, drawn from
-// ancestors until the data arrives, converging to the complete frame; load
-// order; budgets along a long path; servers that die; bad input.
+// `relief render --path` end to end: interactive frames drawn from ancestors
+// until the data arrives, converging to the complete frame; load order;
+// budgets along a long path; servers that die; bad input.
+//
+// These runs go through a real process and a real clock, so they assert
+// only on outcomes (every frame drawn, the last one equal to the complete
+// still, the order of events), never on times: what happens when (no frame
+// waits for the source, complete frames wait for every load, retry pauses)
+// is tested in process on a manual clock (tile_loader_test.cpp).
 #include <gtest/gtest.h>
 
 #include <signal.h>
@@ -19,6 +25,7 @@
 #include "images.h"
 #include "relief/geo/tile_key.h"
 #include "relief/lod/camera.h"
+#include "relief/stream/tile_lifecycle.h"
 #include "servers.h"
 #include "test_support.h"
 
@@ -94,6 +101,40 @@ std::string still(const std::string& camera) {
                      camera);
 }
 
+// Every tile's events follow its lifecycle (tile_lifecycle.h), in frame order.
+void expect_valid_lifecycles(const std::vector<json>& events) {
+  using stream::TileState;
+  const std::map<std::string, std::pair<TileState, TileState>> edges = {
+      {"requested", {TileState::Absent, TileState::Queued}},
+      {"cancelled", {TileState::Queued, TileState::Absent}},
+      {"started", {TileState::Queued, TileState::Loading}},
+      {"loaded", {TileState::Loading, TileState::Resident}},
+      {"failed", {TileState::Loading, TileState::Failed}}};
+  std::map<std::string, TileState> state;
+  size_t frame = 0;
+  for (const json& e : events) {
+    const std::string tile = e["tile"].get<std::string>(), kind = e["event"].get<std::string>();
+    EXPECT_GE(e["frame"].get<size_t>(), frame) << tile << " " << kind;
+    frame = e["frame"].get<size_t>();
+    TileState& s = state.try_emplace(tile, TileState::Absent).first->second;
+    if (kind == "evicted") {
+      EXPECT_TRUE(s == TileState::Resident || s == TileState::Failed) << tile;
+      s = TileState::Absent;
+      continue;
+    }
+    ASSERT_TRUE(edges.contains(kind)) << kind;
+    EXPECT_EQ(s, edges.at(kind).first) << tile << " " << kind;
+    s = edges.at(kind).second;
+  }
+}
+
+// Every frame of the run was written.
+void expect_every_frame_written(const fs::path& dir, size_t frames) {
+  size_t files = 0;
+  for (const auto& f : fs::directory_iterator(dir)) files += f.path().extension() == ".png";
+  EXPECT_EQ(files, frames);
+}
+
 // Every tile a frame draws was fetched, and little else: the bytes fetched
 // are within 10 % of the tiles drawn (with the ancestors they load after).
 void expect_fetches_only_what_is_drawn(const json& stats) {
@@ -104,17 +145,20 @@ void expect_fetches_only_what_is_drawn(const json& stats) {
   EXPECT_LE(fetched, 1.1 * drawn);
 }
 
-TEST_F(StreamingRenderTest, InteractiveFramesDoNotWaitAndConvergeToTheCompleteFrame) {
+TEST_F(StreamingRenderTest, InteractiveFramesConvergeToTheCompleteFrame) {
   const json s = render_path("interactive", still(kGround),
-                             {"--simulate-latency", "300", "--until-complete", "60"});
+                             {"--simulate-latency", "30", "--until-complete", "60"});
   const json& frames = s["frames"];
   ASSERT_GE(frames.size(), 3u);
+  expect_every_frame_written(scratch("interactive"), frames.size());
+  // The first frame has only level 0: it was drawn without waiting for the
+  // tiles it asked for.
   EXPECT_FALSE(frames[0]["complete"].get<bool>());
+  EXPECT_GT(frames[0]["waiting_quads"].get<int>(), 0);
   EXPECT_TRUE(s["summary"]["complete"].get<bool>());
-  for (const json& f : frames) {
-    // A tile takes 300 ms to arrive; no frame waits for one.
-    EXPECT_LT(f["frame_ms"].get<double>(), 200) << f["frame"];
-  }
+  const auto ev = events("interactive");
+  EXPECT_FALSE(ev.empty());
+  expect_valid_lifecycles(ev);
   // The exact mesh errors of the finest tiles' quads were measured by the
   // loader's threads as the tiles arrived, none on the render thread.
   EXPECT_EQ(frames.back()["exact_errors"]["measured"].get<int>(), 0);
@@ -131,26 +175,29 @@ TEST_F(StreamingRenderTest, InteractiveFramesDoNotWaitAndConvergeToTheCompleteFr
       kNoMesaLeakReport);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const Image want = read_png(ref, kWidth, kHeight);
-  const Image got = frame("interactive", frames.size() - 1);
-  size_t differ = 0;
-  for (size_t p = 0; p < want.rgba.size(); ++p) differ += std::abs(want.rgba[p] - got.rgba[p]) > 2;
-  EXPECT_EQ(differ, 0u);
-  // Complete mode waits: its first frame takes at least one round trip.
+  auto differing = [&](const Image& got) {
+    size_t n = 0;
+    for (size_t p = 0; p < want.rgba.size(); ++p) n += std::abs(want.rgba[p] - got.rgba[p]) > 2;
+    return n;
+  };
+  EXPECT_EQ(differing(frame("interactive", frames.size() - 1)), 0u);
+  // Complete mode waits: every frame is complete, the first one too, and
+  // equals the still.
   const json c =
-      render_path("complete", still(kGround), {"--simulate-latency", "300", "--mode", "complete"});
-  EXPECT_GE(c["frames"][0]["frame_ms"].get<double>(), 300);
-  EXPECT_TRUE(c["frames"][0]["complete"].get<bool>());
+      render_path("complete", still(kGround), {"--simulate-latency", "30", "--mode", "complete"});
+  ASSERT_EQ(c["frames"].size(), 6u);
+  for (const json& f : c["frames"]) EXPECT_TRUE(f["complete"].get<bool>()) << f["frame"];
+  EXPECT_EQ(differing(frame("complete", 0)), 0u);
 }
 
 TEST_F(StreamingRenderTest, DrapedImageryStreamsToo) {
   const json s = render_path("imagery", still(kGround),
-                             {"--imagery", imagery().string(), "--simulate-latency", "300",
+                             {"--imagery", imagery().string(), "--simulate-latency", "30",
                               "--until-complete", "60", "--imagery-budget", "3MiB"});
   const json& frames = s["frames"];
   ASSERT_GE(frames.size(), 3u);
   EXPECT_TRUE(s["summary"]["complete"].get<bool>());
   for (const json& f : frames) {
-    EXPECT_LT(f["frame_ms"].get<double>(), 200) << f["frame"];
     EXPECT_EQ(f["imagery_memory"]["budget_bytes"].get<uint64_t>(), 3u << 20);
     EXPECT_LE(f["imagery_memory"]["resident_bytes"].get<uint64_t>(), 3u << 20) << f["frame"];
   }
@@ -216,16 +263,18 @@ TEST_F(StreamingRenderTest, AncestorsAndTheScreenCentreLoadFirst) {
   EXPECT_LT(first, last);
 }
 
-TEST_F(StreamingRenderTest, ASuddenTurnCancelsStaleRequests) {
+// Which requests were cancelled at the turn, and so how many bytes were
+// fetched for a view no frame drew, depends on how far the loads had come
+// (tested in process on a manual clock); here, the outcome.
+TEST_F(StreamingRenderTest, ASuddenTurnIsFollowedByACompleteView) {
   const json s =
       render_path("turn",
                   "{\"time\": 0, \"camera\": [1.5, 42.5, 4000, 0, -25, 0]},"
                   "{\"time\": 0.2, \"camera\": [1.5, 42.5, 4000, 180, -25, 0], \"cut\": true},"
                   "{\"time\": 0.6, \"camera\": [1.5, 42.5, 4000, 180, -25, 0]}",
-                  {"--simulate-latency", "150", "--loads", "2", "--until-complete", "60"});
-  EXPECT_GT(s["summary"]["cancelled"].get<int>(), 0);
+                  {"--simulate-latency", "20", "--loads", "2", "--until-complete", "60"});
   EXPECT_TRUE(s["summary"]["complete"].get<bool>());
-  expect_fetches_only_what_is_drawn(s);  // cancelled before they were fetched
+  expect_valid_lifecycles(events("turn"));
   ASSERT_EQ(s["summary"]["cuts"].size(), 1u);
   EXPECT_FALSE(s["summary"]["cuts"][0]["complete_after_s"].is_null());
 }
@@ -275,12 +324,16 @@ TEST_F(StreamingRenderTest, ServedStoresStreamAndAServerThatDiesIsSurvived) {
   EXPECT_EQ(frame("nginx", via_nginx["frames"].size() - 1).rgba,
             frame("local", local["frames"].size() - 1).rgba);
 
-  // relief serve, killed while the camera flies on to new ground.
+  // relief serve, killed while the camera flies on to new ground: once the
+  // render has written its fifth frame (of 31).
   const int port = free_port();
   const int server = spawn_relief({"serve", store().string(), "--port", std::to_string(port)});
   wait_for(port);
   std::thread killer([&] {
-    std::this_thread::sleep_for(std::chrono::milliseconds(1200));
+    const fs::path fifth = scratch("dying") / "frame_00004.png";
+    for (int i = 0; i < 60000 && !fs::exists(fifth); ++i) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
     ::kill(server, SIGKILL);
     ::waitpid(server, nullptr, 0);
   });

@@ -1,15 +1,26 @@
 // The memory cache and asynchronous loader (libs/stream) in process, on a
 // real store of the N42E001 SRTM tile with small tiles (many of them), read
 // through a simulated slow link or a source that injects failures.
+//
+// Time is a ManualClock: the link answers a request only once the test has
+// moved the clock past its latency, so the tests say what had happened when
+// (which loads had answered when a frame was selected), never how long
+// anything took on this machine.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <mutex>
+#include <set>
 #include <thread>
+#include <tuple>
 
+#include "relief/base/clock.h"
 #include "relief/lod/selection.h"
 #include "relief/stream/throttled_source.h"
 #include "relief/stream/tile_loader.h"
+#include "relief/tiles/store_layout.h"
 #include "test_support.h"
 
 namespace relief::testing {
@@ -20,36 +31,50 @@ using geo::TileKey;
 using stream::TileEventKind;
 using stream::TileState;
 
-class TileLoaderTest : public ::testing::Test {
- protected:
-  static void SetUpTestSuite() {
-    dir_ = new ScratchDir("tile_loader");
-    ASSERT_EQ(run_relief({"build", data("srtm/N42E001.hgt.zip"), "--kind", "elevation", "-o",
-                          store_dir().string(), "--tile-size", "128x64", "-q"})
-                  .exit_code,
-              0);
+// Records which tile files a source answered, and whether any fetch ran on
+// the thread that created it (the test's render thread: a frame that waited).
+// Unless allowed, such a fetch fails at once rather than wait for a clock
+// that the blocked thread itself should advance.
+class RecordingSource final : public tiles::StoreSource {
+ public:
+  explicit RecordingSource(std::shared_ptr<const tiles::StoreSource> inner)
+      : inner_(std::move(inner)) {}
+  std::string name() const override { return inner_->name(); }
+  Result<std::vector<std::byte>> fetch(const std::string& relative) const override {
+    const bool tile = relative.ends_with(".rtile");
+    if (tile && std::this_thread::get_id() == render_thread_) {
+      fetched_on_render_thread = true;
+      if (!render_thread_may_fetch) return fail(relative + ": fetched on the render thread");
+    }
+    auto bytes = inner_->fetch(relative);
+    if (tile) {
+      std::lock_guard lock(mutex_);
+      answered_.insert(relative);
+    }
+    return bytes;
   }
-  static void TearDownTestSuite() { delete dir_; }
-  static std::filesystem::path store_dir() { return dir_->path() / "store"; }
+  size_t answered() const {
+    std::lock_guard lock(mutex_);
+    return answered_.size();
+  }
+  bool answered(const TileKey& key) const {
+    std::lock_guard lock(mutex_);
+    return answered_.contains(tiles::tile_relative_path(key));
+  }
+  // Forgets what happened so far (the loader's blocking read of level 0).
+  void reset() {
+    std::lock_guard lock(mutex_);
+    answered_.clear();
+    fetched_on_render_thread = false;
+  }
+  mutable std::atomic<bool> fetched_on_render_thread{false};
+  std::atomic<bool> render_thread_may_fetch{false};
 
-  static tiles::Store open(std::chrono::milliseconds latency) {
-    stream::LinkModel link;
-    link.latency = latency;
-    auto s = tiles::Store::open(stream::throttled_source(tiles::local_source(store_dir()), link));
-    EXPECT_TRUE(s) << s.error().message;
-    return std::move(*s);
-  }
-  // The tiles of the finest level.
-  static std::vector<TileKey> finest(const tiles::Store& s) {
-    std::vector<TileKey> keys;
-    for (const auto& e : s.index(s.manifest().max_level).entries()) keys.push_back(e.key);
-    return keys;
-  }
-  static void wait_idle(stream::TileLoader& loader) {
-    for (int i = 0; i < 1000 && !loader.idle(); ++i) std::this_thread::sleep_for(5ms);
-    ASSERT_TRUE(loader.idle());
-  }
-  static inline ScratchDir* dir_ = nullptr;
+ private:
+  std::shared_ptr<const tiles::StoreSource> inner_;
+  const std::thread::id render_thread_ = std::this_thread::get_id();
+  mutable std::mutex mutex_;
+  mutable std::set<std::string> answered_;
 };
 
 // Events delivered to a listener, in order.
@@ -67,104 +92,159 @@ struct Recorder {
   }
 };
 
-// A loader with one load in flight at a time, its events recorded.
-Result<std::unique_ptr<stream::TileLoader>> one_at_a_time(const tiles::Store& store,
-                                                          Recorder& rec) {
-  stream::LoaderOptions o;
-  o.max_in_flight = 1;
-  auto loader = stream::TileLoader::create(store, o);
-  if (loader) rec.attach(**loader);
-  return loader;
-}
+class TileLoaderTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new ScratchDir("tile_loader");
+    ASSERT_EQ(run_relief({"build", data("srtm/N42E001.hgt.zip"), "--kind", "elevation", "-o",
+                          store_dir().string(), "--tile-size", "128x64", "-q"})
+                  .exit_code,
+              0);
+  }
+  static void TearDownTestSuite() { delete dir_; }
+  static std::filesystem::path store_dir() { return dir_->path() / "store"; }
+
+  // Runs before the members go: no load may still be asleep on the clock
+  // when the loader joins its workers.
+  ~TileLoaderTest() override { clock_.set_free(true); }
+
+  // The store through a link of `latency` on the test's clock (or through
+  // `inner` instead of the local directory).
+  tiles::Store& open(Clock::Duration latency,
+                     std::shared_ptr<const tiles::StoreSource> inner = nullptr) {
+    stream::LinkModel link;
+    link.latency = std::chrono::duration_cast<std::chrono::microseconds>(latency);
+    if (!inner) inner = tiles::local_source(store_dir());
+    source_ = std::make_shared<RecordingSource>(stream::throttled_source(inner, link, clock_));
+    source_->render_thread_may_fetch = true;  // the manifest, indices and level 0
+    clock_.set_free(true);                    // arrive at once
+    auto s = tiles::Store::open(source_);
+    clock_.set_free(false);
+    EXPECT_TRUE(s) << s.error().message;
+    store_.emplace(std::move(*s));
+    return *store_;
+  }
+  // A loader of the store on the test's clock (level 0 arrives at once), its
+  // events recorded.
+  stream::TileLoader& loader(stream::LoaderOptions o = {}) {
+    o.clock = &clock_;
+    const bool was_free = free_;
+    set_free(true);
+    auto l = stream::TileLoader::create(*store_, o);
+    set_free(was_free);
+    source_->reset();
+    source_->render_thread_may_fetch = false;
+    EXPECT_TRUE(l) << l.error().message;
+    loader_ = std::move(*l);
+    recorder_.attach(*loader_);
+    return *loader_;
+  }
+  void set_free(bool free) {
+    free_ = free;
+    clock_.set_free(free);
+  }
+  // One frame's requests; the previous frame's events are delivered first.
+  void frame(const std::vector<std::pair<TileKey, double>>& requests) {
+    loader_->begin_frame();
+    for (const auto& [key, priority] : requests) loader_->request(key, priority);
+    loader_->end_frame();
+  }
+  // Waits until nothing is queued or loading (the clock must let loads end).
+  void wait_idle() {
+    for (int i = 0; i < 60000 && !loader_->idle(); ++i) std::this_thread::sleep_for(1ms);
+    ASSERT_TRUE(loader_->idle());
+    loader_->begin_frame();  // delivers the events
+  }
+  // The tiles of the finest level.
+  std::vector<TileKey> finest() const {
+    std::vector<TileKey> keys;
+    for (const auto& e : store_->index(store_->manifest().max_level).entries()) {
+      keys.push_back(e.key);
+    }
+    return keys;
+  }
+
+  static inline ScratchDir* dir_ = nullptr;
+  ManualClock clock_;
+  bool free_ = false;
+  std::shared_ptr<RecordingSource> source_;
+  std::optional<tiles::Store> store_;
+  Recorder recorder_;
+  std::unique_ptr<stream::TileLoader> loader_;
+};
 
 TEST_F(TileLoaderTest, LevelZeroIsResidentFromTheStart) {
-  tiles::Store store = open(0ms);
-  auto loader = stream::TileLoader::create(store, {});
-  ASSERT_TRUE(loader);
-  EXPECT_EQ((*loader)->state({0, 0, 0}), TileState::Resident);
-  auto tile = (*loader)->get({0, 0, 0});
+  open(0ms);
+  stream::TileLoader& l = loader();
+  EXPECT_EQ(l.state({0, 0, 0}), TileState::Resident);
+  auto tile = l.get({0, 0, 0});
   ASSERT_TRUE(tile && *tile);
-  EXPECT_FALSE(*(*loader)->get(finest(store).front()));  // never loaded on get()
+  EXPECT_FALSE(*l.get(finest().front()));  // never loaded on get()
 }
 
 TEST_F(TileLoaderTest, LoadsHighestPriorityFirst) {
-  tiles::Store store = open(30ms);
-  Recorder rec;
-  auto loader = one_at_a_time(store, rec);
-  ASSERT_TRUE(loader);
-  const auto keys = finest(store);
+  open(30ms);
+  stream::TileLoader& l = loader({.max_in_flight = 1});
+  const auto keys = finest();
   ASSERT_GE(keys.size(), 6u);
-  (*loader)->begin_frame();
-  for (size_t i = 0; i < 6; ++i) (*loader)->request(keys[i], static_cast<double>(i));
-  (*loader)->end_frame();
-  wait_idle(**loader);
-  (*loader)->begin_frame();  // delivers the events
-  const auto started = rec.keys(TileEventKind::Started);
+  std::vector<std::pair<TileKey, double>> requests;
+  for (size_t i = 0; i < 6; ++i) requests.emplace_back(keys[i], static_cast<double>(i));
+  frame(requests);
+  set_free(true);
+  wait_idle();
+  const auto started = recorder_.keys(TileEventKind::Started);
   ASSERT_EQ(started.size(), 6u);
   for (size_t i = 0; i < 6; ++i) EXPECT_EQ(started[i], keys[5 - i]) << i;
-  EXPECT_EQ(rec.keys(TileEventKind::Loaded).size(), 6u);
-  EXPECT_EQ((*loader)->state(keys[0]), TileState::Resident);
+  EXPECT_EQ(recorder_.keys(TileEventKind::Loaded).size(), 6u);
+  EXPECT_EQ(l.state(keys[0]), TileState::Resident);
 }
 
 TEST_F(TileLoaderTest, StaleRequestsAreCancelled) {
-  tiles::Store store = open(100ms);
-  Recorder rec;
-  auto loader = one_at_a_time(store, rec);
-  ASSERT_TRUE(loader);
-  const auto keys = finest(store);
+  open(100ms);
+  stream::TileLoader& l = loader({.max_in_flight = 1});
+  const auto keys = finest();
   ASSERT_GE(keys.size(), 8u);
-  (*loader)->begin_frame();
-  for (size_t i = 0; i < 6; ++i) (*loader)->request(keys[i], 1.0 + i);
-  (*loader)->end_frame();
-  std::this_thread::sleep_for(20ms);  // the first load is in flight
-  (*loader)->begin_frame();           // the view turned: other tiles now
-  (*loader)->request(keys[6], 1);
-  (*loader)->request(keys[7], 2);
-  (*loader)->end_frame();
-  wait_idle(**loader);
-  (*loader)->begin_frame();
-  EXPECT_EQ(rec.keys(TileEventKind::Cancelled).size(), 5u);
-  const auto loaded = rec.keys(TileEventKind::Loaded);
+  std::vector<std::pair<TileKey, double>> first;
+  for (size_t i = 0; i < 6; ++i) first.emplace_back(keys[i], 1.0 + static_cast<double>(i));
+  frame(first);
+  // The best of them is in flight, waiting for the link; five are queued.
+  ASSERT_TRUE(clock_.wait_for_sleepers(1));
+  EXPECT_EQ(l.state(keys[5]), TileState::Loading);
+  frame({{keys[6], 1}, {keys[7], 2}});  // the view turned: other tiles now
+  set_free(true);
+  wait_idle();
+  EXPECT_EQ(recorder_.keys(TileEventKind::Cancelled).size(), 5u);
+  const auto loaded = recorder_.keys(TileEventKind::Loaded);
   ASSERT_EQ(loaded.size(), 3u);  // the one in flight, then the new view's
   EXPECT_EQ(loaded[0], keys[5]);
   EXPECT_EQ(loaded[1], keys[7]);
   EXPECT_EQ(loaded[2], keys[6]);
-  for (size_t i = 0; i < 5; ++i) EXPECT_EQ((*loader)->state(keys[i]), TileState::Absent);
-  EXPECT_EQ((*loader)->stats().cancelled, 5u);
+  for (size_t i = 0; i < 5; ++i) EXPECT_EQ(l.state(keys[i]), TileState::Absent);
+  EXPECT_EQ(l.stats().cancelled, 5u);
 }
 
 TEST_F(TileLoaderTest, BudgetHoldsAndPinnedTilesStay) {
-  tiles::Store store = open(0ms);
-  const auto keys = finest(store);
+  tiles::Store& store = open(0ms);
+  const auto keys = finest();
   auto probe = lod::decode_heights(store, keys[0]);
   ASSERT_TRUE(probe);
   const uint64_t tile_bytes = (*probe)->byte_size();
-  stream::LoaderOptions o;
-  o.memory_budget = 4 * tile_bytes;  // level 0 and three more
-  auto loader = stream::TileLoader::create(store, o);
-  ASSERT_TRUE(loader);
-  Recorder rec;
-  rec.attach(**loader);
+  const uint64_t budget = 4 * tile_bytes;  // level 0 and three more
+  stream::TileLoader& l = loader({.memory_budget = budget});
   // Load one tile and pin it.
-  (*loader)->begin_frame();
-  (*loader)->request(keys[0], 1);
-  (*loader)->end_frame();
-  wait_idle(**loader);
-  const lod::TilePtr pin = *(*loader)->get(keys[0]);
+  frame({{keys[0], 1}});
+  wait_idle();
+  const lod::TilePtr pin = *l.get(keys[0]);
   ASSERT_TRUE(pin);
   for (size_t i = 1; i < std::min<size_t>(keys.size(), 25); ++i) {
-    (*loader)->begin_frame();
-    (*loader)->request(keys[i], 1);
-    (*loader)->end_frame();
-    wait_idle(**loader);
-    const auto s = (*loader)->stats();
-    EXPECT_LE(s.resident_bytes, o.memory_budget) << i;
-    EXPECT_EQ((*loader)->state(keys[0]), TileState::Resident) << i;
-    EXPECT_EQ((*loader)->state({0, 0, 0}), TileState::Resident) << i;
+    frame({{keys[i], 1}});
+    wait_idle();
+    EXPECT_LE(l.stats().resident_bytes, budget) << i;
+    EXPECT_EQ(l.state(keys[0]), TileState::Resident) << i;
+    EXPECT_EQ(l.state({0, 0, 0}), TileState::Resident) << i;
   }
-  (*loader)->begin_frame();
-  EXPECT_GE(rec.keys(TileEventKind::Evicted).size(), 15u);
-  EXPECT_GE((*loader)->stats().pinned_bytes, 2 * tile_bytes);
+  EXPECT_GE(recorder_.keys(TileEventKind::Evicted).size(), 15u);
+  EXPECT_GE(l.stats().pinned_bytes, 2 * tile_bytes);
 }
 
 // A source whose tile files fail until `healthy` is set.
@@ -185,82 +265,169 @@ class FlakySource final : public tiles::StoreSource {
   std::shared_ptr<const tiles::StoreSource> inner_;
 };
 
-TEST_F(TileLoaderTest, FailuresAreReportedNotCachedAndRetriedLater) {
+// A failed tile is not asked for again before its pause is over; the pause
+// doubles with each failure up to the maximum, on the loader's clock.
+TEST_F(TileLoaderTest, FailuresAreReportedNotCachedAndRetriedAfterDoublingPauses) {
   auto flaky = std::make_shared<FlakySource>(tiles::local_source(store_dir()));
-  auto store = tiles::Store::open(flaky);
-  ASSERT_TRUE(store);
-  stream::LoaderOptions o;
-  o.retry_failed_after = 0.3;
-  auto loader = stream::TileLoader::create(*store, o);
-  ASSERT_TRUE(loader);
-  Recorder rec;
-  rec.attach(**loader);
-  const TileKey key = finest(*store).front();
-  (*loader)->begin_frame();
-  (*loader)->request(key, 1);
-  (*loader)->end_frame();
-  wait_idle(**loader);
-  (*loader)->begin_frame();
-  EXPECT_EQ((*loader)->state(key), TileState::Failed);
-  ASSERT_EQ(rec.keys(TileEventKind::Failed).size(), 1u);
-  const auto& failed = *std::find_if(rec.events.begin(), rec.events.end(),
+  open(0ms, flaky);
+  stream::TileLoader& l = loader({.retry_failed_after = 2, .retry_failed_max = 10});
+  const TileKey key = finest().front();
+  frame({{key, 1}});
+  wait_idle();
+  EXPECT_EQ(l.state(key), TileState::Failed);
+  ASSERT_EQ(recorder_.keys(TileEventKind::Failed).size(), 1u);
+  const auto& failed = *std::find_if(recorder_.events.begin(), recorder_.events.end(),
                                      [](const auto& e) { return e.kind == TileEventKind::Failed; });
   EXPECT_NE(failed.error.find("injected"), std::string::npos) << failed.error;
-  EXPECT_FALSE(*(*loader)->get(key));
-  // Asked again at once: still failed, not hammered.
-  (*loader)->request(key, 1);
-  (*loader)->end_frame();
-  wait_idle(**loader);
-  EXPECT_EQ((*loader)->stats().failed, 1u);
-  // After the pause it is tried again and fails again: the pause doubles.
-  std::this_thread::sleep_for(350ms);
-  (*loader)->begin_frame();
-  (*loader)->request(key, 1);
-  (*loader)->end_frame();
-  wait_idle(**loader);
-  EXPECT_EQ((*loader)->stats().failed, 2u);
-  std::this_thread::sleep_for(350ms);  // more than the first pause, less than the second
-  (*loader)->begin_frame();
-  (*loader)->request(key, 1);
-  (*loader)->end_frame();
-  wait_idle(**loader);
-  EXPECT_EQ((*loader)->stats().failed, 2u);
-  EXPECT_EQ((*loader)->state(key), TileState::Failed);
-  // The server recovers; after the longer pause the tile loads.
+  EXPECT_FALSE(*l.get(key));
+  // Each pause: asked for just before it ends, the tile stays failed (not
+  // hammered); at its end it is tried again and fails again.
+  uint64_t failures = 1;
+  for (const auto pause : {2s, 4s, 8s, 10s, 10s}) {
+    SCOPED_TRACE(pause.count());
+    clock_.advance(pause - 1ms);
+    frame({{key, 1}});
+    wait_idle();
+    EXPECT_EQ(l.stats().failed, failures);
+    EXPECT_EQ(l.state(key), TileState::Failed);
+    clock_.advance(1ms);
+    frame({{key, 1}});
+    wait_idle();
+    EXPECT_EQ(l.stats().failed, ++failures);
+  }
+  // The server recovers; after the pause the tile loads.
   flaky->healthy = true;
-  std::this_thread::sleep_for(300ms);
-  (*loader)->begin_frame();
-  (*loader)->request(key, 1);
-  (*loader)->end_frame();
-  wait_idle(**loader);
-  EXPECT_EQ((*loader)->state(key), TileState::Resident);
-  EXPECT_TRUE(*(*loader)->get(key));
+  clock_.advance(10s);
+  frame({{key, 1}});
+  wait_idle();
+  EXPECT_EQ(l.state(key), TileState::Resident);
+  EXPECT_TRUE(*l.get(key));
 }
 
-// The render thread's part of a frame (selection and requests) takes the
-// same short time whatever the latency: it never waits for a load.
-TEST_F(TileLoaderTest, SelectionNeverWaitsForSlowLoads) {
-  tiles::Store store = open(300ms);
-  auto loader = stream::TileLoader::create(store, {});
-  ASSERT_TRUE(loader);
+// What a frame draws, to compare two selections.
+std::vector<std::tuple<TileKey, int, int, int>> drawn(const lod::Selection& s) {
+  std::vector<std::tuple<TileKey, int, int, int>> out;
+  for (const auto& q : s.quads)
+    out.emplace_back(q.key, q.finer_sides, q.coarse_sides, q.coarse_corners);
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+// The render thread's part of an interactive frame.
+Result<lod::Selection> select_frame(lod::TerrainModel& terrain, const lod::View& view) {
+  terrain.begin_frame();
+  auto s = lod::select_quads(view, terrain, {});
+  terrain.end_frame();
+  return s;
+}
+
+const lod::Camera kOblique = lod::look_at(1.5, 42.5, 1500, 30000, 20, -35, 60, 320, 240);
+
+// Interactive frames are drawn while the source has answered nothing: frames
+// at 0, 100 and 200 ms of a 300 ms link draw level 0 and ask for the rest.
+// Once the loads are done, the frame is the complete frame.
+TEST_F(TileLoaderTest, FramesNeverWaitForTheSourceAndConvergeToTheCompleteFrame) {
+  tiles::Store& store = open(300ms);
+  stream::TileLoader& l = loader();
   const lod::MeshTopology mesh(3);
-  lod::TerrainModel terrain(store, mesh, **loader);
-  auto view = lod::make_view(lod::look_at(1.5, 42.5, 1500, 30000, 20, -35, 60, 320, 240));
+  lod::TerrainModel terrain(store, mesh, l);
+  auto view = lod::make_view(kOblique);
   ASSERT_TRUE(view);
-  uint32_t first_waiting = 0;
-  for (int frame = 0; frame < 8; ++frame) {
-    const auto start = std::chrono::steady_clock::now();
-    terrain.begin_frame();
-    auto s = lod::select_quads(*view, terrain, {});
-    terrain.end_frame();
-    const auto took = std::chrono::steady_clock::now() - start;
+  for (int frame = 0; frame < 3; ++frame) {
+    SCOPED_TRACE(frame);
+    auto s = select_frame(terrain, *view);
     ASSERT_TRUE(s) << s.error().message;
-    if (frame == 0) first_waiting = s->stats.waiting;
-    EXPECT_LT(took, 150ms) << frame;  // a load takes 300 ms
-    std::this_thread::sleep_for(10ms);
+    EXPECT_EQ(source_->answered(), 0u);  // no tile had arrived when this frame was drawn
+    EXPECT_GT(s->stats.waiting, 0u);     // so it drew coarser quads, and asked for their data
+    EXPECT_GT(l.stats().requested, 0u);
+    clock_.advance(100ms);
   }
-  EXPECT_GT(first_waiting, 0u);
-  EXPECT_FALSE((*loader)->idle());  // loads still under way: nothing waited for them
+  EXPECT_FALSE(source_->fetched_on_render_thread);
+  // Let the link answer; frame after frame, the view fills in.
+  set_free(true);
+  std::optional<lod::Selection> last;
+  for (int frame = 0; frame < 64 && (!last || last->stats.waiting > 0); ++frame) {
+    wait_idle();
+    auto s = select_frame(terrain, *view);
+    ASSERT_TRUE(s) << s.error().message;
+    last = std::move(*s);
+  }
+  ASSERT_EQ(last->stats.waiting, 0u);
+  EXPECT_FALSE(source_->fetched_on_render_thread);
+  // The loader's threads measured the finest tiles' exact errors, not this one.
+  EXPECT_EQ(terrain.error_counts().measured, 0u);
+  EXPECT_GT(terrain.error_counts().prepared, 0u);
+  auto local = tiles::Store::open(store_dir());
+  ASSERT_TRUE(local);
+  lod::TerrainModel complete(&*local, mesh, uint64_t{256} << 20);
+  auto want = lod::select_quads(*view, complete, {});
+  ASSERT_TRUE(want);
+  EXPECT_EQ(drawn(*last), drawn(*want));
+}
+
+// A complete frame waits: it returns only once the source has answered every
+// tile it draws, a round trip of the link later.
+TEST_F(TileLoaderTest, CompleteFramesDrawOnlyAfterTheirLoads) {
+  tiles::Store& store = open(300ms);
+  source_->render_thread_may_fetch = true;  // a complete frame waits for its tiles
+  set_free(true);                           // time moves as each request waits for the link
+  const lod::MeshTopology mesh(3);
+  lod::TerrainModel terrain(&store, mesh, uint64_t{256} << 20);
+  auto view = lod::make_view(kOblique);
+  ASSERT_TRUE(view);
+  const auto start = clock_.now();
+  auto s = lod::select_quads(*view, terrain, {});
+  const auto drawn_at = clock_.now();
+  ASSERT_TRUE(s) << s.error().message;
+  EXPECT_TRUE(source_->fetched_on_render_thread);
+  EXPECT_GE(drawn_at - start, 300ms);
+  size_t tiles = 0;
+  for (const auto& q : s->quads) {
+    for (const auto& w : {terrain.window(q.key), terrain.parent_window(q.key)}) {
+      if (!w.tile || !store.has_tile(*w.tile)) continue;
+      EXPECT_TRUE(source_->answered(*w.tile)) << w.tile->to_string();
+      ++tiles;
+    }
+  }
+  EXPECT_GT(tiles, 0u);
+}
+
+// A sudden turn: the requests of the view left behind that are still queued
+// are cancelled; the new view's are not.
+TEST_F(TileLoaderTest, ASuddenTurnCancelsStaleRequests) {
+  tiles::Store& store = open(150ms);
+  stream::TileLoader& l = loader({.max_in_flight = 2});
+  const lod::MeshTopology mesh(3);
+  lod::TerrainModel terrain(store, mesh, l);
+  auto ahead = lod::make_view(lod::look_at(1.5, 42.5, 1000, 20000, 0, -25, 60, 320, 240));
+  auto behind = lod::make_view(lod::look_at(1.5, 42.5, 1000, 20000, 180, -25, 60, 320, 240));
+  ASSERT_TRUE(ahead && behind);
+  ASSERT_TRUE(select_frame(terrain, *ahead));
+  ASSERT_TRUE(clock_.wait_for_sleepers(2));  // two loads in flight, the rest queued
+  ASSERT_GT(l.stats().queued, 0u);
+  ASSERT_TRUE(select_frame(terrain, *behind));
+  l.begin_frame();  // delivers the events
+  const auto cancelled = recorder_.keys(TileEventKind::Cancelled);
+  EXPECT_GT(cancelled.size(), 0u);
+  EXPECT_EQ(l.stats().cancelled, cancelled.size());
+  // Absent now: the new view did not ask for them again. None had started:
+  // only the two loads in flight were spent on the view left behind.
+  const auto started = recorder_.keys(TileEventKind::Started);
+  EXPECT_EQ(started.size(), 2u);
+  for (const auto& k : cancelled) {
+    EXPECT_EQ(l.state(k), TileState::Absent) << k.to_string();
+    EXPECT_EQ(std::count(started.begin(), started.end(), k), 0) << k.to_string();
+  }
+  // The new view converges as if the old one had never been.
+  set_free(true);
+  std::optional<lod::Selection> last;
+  for (int frame = 0; frame < 64 && (!last || last->stats.waiting > 0); ++frame) {
+    wait_idle();
+    auto s = select_frame(terrain, *behind);
+    ASSERT_TRUE(s);
+    last = std::move(*s);
+  }
+  EXPECT_EQ(last->stats.waiting, 0u);
 }
 
 }  // namespace

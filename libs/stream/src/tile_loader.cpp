@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cassert>
-#include <chrono>
 #include <cmath>
 #include <condition_variable>
 #include <list>
@@ -17,7 +16,6 @@ namespace relief::stream {
 namespace {
 
 using geo::TileKey;
-using Clock = std::chrono::steady_clock;
 
 // Prefetch priorities are scaled into a band below every current request.
 constexpr double kPrefetchScale = 1e-12;
@@ -29,7 +27,7 @@ struct Entry {
   std::list<TileKey>::iterator lru;  // Resident only
   bool permanent = false;            // level 0
   bool prefetch = false;             // loaded for a predicted view, not drawn yet
-  Clock::time_point failed_at;
+  Clock::TimePoint failed_at;
   uint32_t failures = 0;  // in a row, reset by a load
 };
 
@@ -179,7 +177,7 @@ struct TileLoader::Impl {
       Entry& done = entries.at(r.key);  // Loading entries are never erased by others
       if (!tile) {
         ++counters.failed;
-        done.failed_at = Clock::now();
+        done.failed_at = options.clock->now();
         ++done.failures;
         move(r.key, done, TileState::Failed,
              {TileEventKind::Failed, r.key, 0, r.prefetch, tile.error().message});
@@ -221,6 +219,7 @@ TileLoader::~TileLoader() {
 Result<std::unique_ptr<TileLoader>> TileLoader::create(const tiles::Store& store,
                                                        const LoaderOptions& options) {
   if (options.max_in_flight < 1) return fail("loader: at least one load must be allowed in flight");
+  assert(options.clock);
   auto impl = std::make_unique<Impl>(store, options);
   for (const tiles::IndexEntry& ie : store.index(0).entries()) {
     lod::TilePtr tile = RELIEF_TRY(lod::decode_tile(store, ie.key));
@@ -288,11 +287,10 @@ void TileLoader::end_frame() {
       m.erase(r.key);
     }
     m.queue.clear();
-    const auto now = Clock::now();
+    const auto now = m.options.clock->now();
     for (const auto& [key, r] : m.frame_requests) {
       Entry& e = m.entries[key];
-      if (e.state == TileState::Failed &&
-          std::chrono::duration<double>(now - e.failed_at).count() >= m.retry_pause(e)) {
+      if (e.state == TileState::Failed && seconds_between(e.failed_at, now) >= m.retry_pause(e)) {
         m.move(key, e, TileState::Absent, {TileEventKind::Evicted, key, 0, r.prefetch, {}});
       }
       if (e.state == TileState::Absent) {

@@ -23,6 +23,7 @@
 #include <memory>
 #include <vector>
 
+#include "relief/base/clock.h"
 #include "relief/base/result.h"
 #include "relief/lod/tile_provider.h"
 #include "relief/stream/tile_lifecycle.h"
@@ -41,6 +42,9 @@ struct LoaderOptions {
   // hammered; a recovered one is used again soon).
   double retry_failed_after = 2.0;  // seconds
   double retry_failed_max = 60.0;   // seconds
+  // What the retry pauses are measured on (tests pass a ManualClock); must
+  // outlive the loader.
+  const Clock* clock = &steady_clock();
 };
 
 struct LevelUse {
