@@ -61,6 +61,7 @@ path options:
   --pager P          priority (default) or radius:K (every tile within K tile
                      sizes of the camera, level by level; a baseline for benchmarks)
   --until-complete S after the path, keep drawing its last view until complete (at most S s)
+  --max-frames N     refuse a path of more than N frames (default 100000)
   --events FILE      every tile lifecycle event as JSON lines
   --no-frames        do not write frame images (statistics only)
 )";
@@ -166,6 +167,7 @@ int run_render(const std::vector<std::string>& argv) {
                            {"--no-prefetch", "", false},
                            {"--pager"},
                            {"--until-complete"},
+                           {"--max-frames"},
                            {"--events"},
                            {"--no-frames", "", false}},
                           "render");

@@ -25,6 +25,10 @@ namespace {
 
 using nlohmann::json;
 
+// A path longer than this many frames is refused unless --max-frames allows
+// it: a typo in a keyframe's time (1e12 s) must not render until killed.
+constexpr int kDefaultMaxFrames = 100000;
+
 struct PathOptions {
   bool interactive = true;
   double fps = 0;  // 0: the path's
@@ -33,6 +37,7 @@ struct PathOptions {
   bool prefetch = true;
   double radius = 0;  // > 0: the radius pager
   double until_complete = 0;
+  int max_frames = kDefaultMaxFrames;
   std::string events, stats;
   bool frames = true;
 };
@@ -70,6 +75,7 @@ Result<PathOptions> parse_path_options(const Args& args) {
     if (!(*s >= 0 && *s <= 3600)) return fail("--until-complete: must be in [0, 3600] s");
     o.until_complete = *s;
   }
+  if (auto n = RELIEF_TRY(args.get_int("--max-frames", 1, 100000000))) o.max_frames = *n;
   o.events = args.get("--events").value_or("");
   o.stats = args.get("--stats").value_or("");
   o.frames = !args.has("--no-frames");
@@ -110,6 +116,7 @@ Result<std::pair<std::vector<lod::Keyframe>, double>> read_path(const std::strin
     }
     lod::Keyframe key;
     key.time = k["time"].get<double>();
+    if (!std::isfinite(key.time)) return fail(where + ": \"time\" must be finite");
     key.camera = {c[0], c[1], c[2], c[3], c[4], c[5], s.fov, s.width, s.height};
     key.cut = k.value("cut", false);
     if (!keys.empty() && !(key.time > keys.back().time)) {
@@ -217,7 +224,15 @@ int render_path(const Args& args, RenderSetup& setup, const Clock& clock) {
   const auto& [keys, path_fps] = *path;
   const double fps = options->fps > 0 ? options->fps : path_fps;
   const double duration = keys.back().time - keys.front().time;
-  const size_t path_frames = static_cast<size_t>(std::floor(duration * fps + 1e-9)) + 1;
+  // In double: a huge duration must not overflow the frame count.
+  const double frame_count = std::floor(duration * fps + 1e-9) + 1;
+  if (!(frame_count <= options->max_frames)) {
+    return report_error(
+        fmt::format("{}: {:.6g} s at {:g} fps is {:.6g} frames, more than "
+                    "--max-frames {} (raise it for longer paths)",
+                    *args.get("--path"), duration, fps, frame_count, options->max_frames));
+  }
+  const auto path_frames = static_cast<size_t>(frame_count);
   const std::string out = *args.get("--output");
   if (options->frames) {
     std::error_code ec;

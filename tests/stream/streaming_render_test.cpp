@@ -376,6 +376,16 @@ TEST_F(StreamingRenderTest, BadPathsAndOptionsAreOneLineErrors) {
   EXPECT_TRUE(is_one_line_error(run(ok, {"--camera", kGroundStill}), "--path replaces"));
   EXPECT_TRUE(is_one_line_error(run(ok, {"--full-resolution"}), "--full-resolution"));
   EXPECT_TRUE(is_one_line_error(run(ok, {"--loads", "0"}), "--loads"));
+  // A path of 1e12 s would render until killed: refused, naming the file.
+  EXPECT_TRUE(is_one_line_error(
+      run("{\"fps\": 30, \"keyframes\": [{\"time\": 0, \"camera\": [1, 42, 3000, 0, -30, 0]},"
+          "{\"time\": 1e12, \"camera\": [1, 42, 3000, 0, -30, 0]}]}"),
+      "bad.json: 1e+12 s at 30 fps is 3e+13 frames, more than --max-frames 100000"));
+  // The still path is 6 frames at 10 fps: --max-frames 6 takes it, 5 does not.
+  const std::string six = "{\"fps\": 10, \"keyframes\": [" + still(kGround) + "]}";
+  EXPECT_TRUE(is_one_line_error(run(six, {"--max-frames", "5"}), "bad.json: 0.5 s at 10 fps"));
+  EXPECT_EQ(run(six, {"--max-frames", "6", "--no-frames", "--size", "64x48"}).exit_code, 0);
+  EXPECT_TRUE(is_one_line_error(run(ok, {"--max-frames", "0"}), "--max-frames"));
   EXPECT_TRUE(is_one_line_error(run_relief({"render", store().string(), "--path",
                                             scratch("missing.json").string(), "-o", out.string()}),
                                 "missing.json"));
