@@ -1,11 +1,14 @@
 // The disk cache of remote stores: hits skip the upstream, the byte budget
 // holds, damaged files heal, concurrent requests share one fetch, and the
 // cache survives a restart. The upstream is the real local store, wrapped to
-// count and slow down requests.
+// count requests and to hold them until the test lets them through.
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <chrono>
+#include <condition_variable>
 #include <fstream>
+#include <mutex>
 #include <thread>
 
 #include "relief/net/disk_cache.h"
@@ -19,20 +22,38 @@ namespace fs = std::filesystem;
 
 class CountingSource : public tiles::StoreSource {
  public:
-  explicit CountingSource(fs::path root, int delay_ms = 0)
-      : inner_(tiles::local_source(root)), delay_ms_(delay_ms) {}
+  explicit CountingSource(fs::path root) : inner_(tiles::local_source(root)) {}
   std::string name() const override { return inner_->name(); }
   Result<std::vector<std::byte>> fetch(const std::string& rel) const override {
     ++requests;
-    if (delay_ms_) std::this_thread::sleep_for(std::chrono::milliseconds(delay_ms_));
+    std::unique_lock lock(mutex_);
+    opened_.wait(lock, [&] { return open_; });
     return inner_->fetch(rel);
+  }
+  // While closed, fetches wait.
+  void set_open(bool open) {
+    {
+      std::lock_guard lock(mutex_);
+      open_ = open;
+    }
+    opened_.notify_all();
   }
   mutable std::atomic<int> requests{0};
 
  private:
   std::shared_ptr<const tiles::StoreSource> inner_;
-  int delay_ms_;
+  mutable std::mutex mutex_;
+  mutable std::condition_variable opened_;
+  bool open_ = true;
 };
+
+// Waits (in real time, only as a safety net) until `done` holds.
+template <typename F>
+bool eventually(F done) {
+  for (int i = 0; i < 60000 && !done(); ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  return done();
+}
 
 uint64_t bytes_under(const fs::path& dir) {
   uint64_t total = 0;
@@ -101,9 +122,10 @@ TEST_F(DiskCacheTest, HitsBudgetRepairAndRestart) {
 
 TEST_F(DiskCacheTest, ConcurrentRequestsShareOneFetch) {
   ScratchDir cache_dir("disk_cache_shared");
-  auto upstream = std::make_shared<CountingSource>(store(), 150);
+  auto upstream = std::make_shared<CountingSource>(store());
   auto cache = net::DiskCache::create(upstream, cache_dir.path(), uint64_t{64} << 20);
   const std::string path = tile_paths()[3];
+  upstream->set_open(false);  // the first fetch stays in flight until all have asked
   std::vector<std::thread> threads;
   std::atomic<int> good{0};
   for (int i = 0; i < 8; ++i) {
@@ -111,10 +133,13 @@ TEST_F(DiskCacheTest, ConcurrentRequestsShareOneFetch) {
       if ((*cache)->fetch(path)) ++good;
     });
   }
+  const bool all_asked = eventually([&] { return (*cache)->stats().shared == 7; });
+  upstream->set_open(true);
   for (auto& t : threads) t.join();
+  ASSERT_TRUE(all_asked);
   EXPECT_EQ(good.load(), 8);
-  EXPECT_EQ(upstream->requests, 1);
-  EXPECT_GT((*cache)->stats().shared, 0u);
+  EXPECT_EQ(upstream->requests, 1);  // the seven others waited for the one in flight
+  EXPECT_EQ((*cache)->stats().shared, 7u);
 }
 
 TEST_F(DiskCacheTest, AStoreReadsThroughTheCache) {

@@ -137,7 +137,8 @@ TEST_F(HttpSourceTest, RemoteStoresReadLikeLocalOnes) {
   ASSERT_TRUE(source);
   std::shared_ptr<const tiles::StoreSource> s = *source;
   Result<tiles::Store> remote = fail("not yet");
-  for (int i = 0; i < 100 && !remote; ++i) {
+  // Until the server listens (a bound in real time only as a safety net).
+  for (int i = 0; i < 3000 && !remote; ++i) {
     remote = tiles::Store::open(s);
     if (!remote) std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
