@@ -9,7 +9,7 @@
 #include <fstream>
 #include <thread>
 
-#include "relief/base/clock.h"
+#include "relief/base/manual_clock.h"
 #include "relief/stream/throttled_source.h"
 #include "test_support.h"
 

@@ -16,7 +16,7 @@
 #include <thread>
 #include <tuple>
 
-#include "relief/base/clock.h"
+#include "relief/base/manual_clock.h"
 #include "relief/lod/selection.h"
 #include "relief/stream/throttled_source.h"
 #include "relief/stream/tile_loader.h"
