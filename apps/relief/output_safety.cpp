@@ -20,6 +20,7 @@ struct Resolved {
   fs::path path;     // absolute, symlinks resolved as far as the path exists
   bool exists = false;
   bool directory = false;
+  bool store = false;  // a directory holding a relief store's manifest.json
   dev_t device = 0;
   ino_t inode = 0;
 };
@@ -35,6 +36,7 @@ Resolved resolve(const std::string& text) {
   if (::stat(text.c_str(), &st) == 0) {
     r.exists = true;
     r.directory = S_ISDIR(st.st_mode);
+    r.store = r.directory && fs::exists(fs::path(text) / "manifest.json", ec);
     r.device = st.st_dev;
     r.inode = st.st_ino;
   }
@@ -61,7 +63,8 @@ Status check_against_input(const Output& out, const Resolved& o, const Resolved&
     return fail(
         fmt::format("{}: {} is the input {}; choose another output", out.option, o.text, in.text));
   }
-  if (in.directory && lies_inside(o.path, in.path)) {
+  // Any other input directory is not a store, and the command refuses it.
+  if (in.store && lies_inside(o.path, in.path)) {
     return fail(fmt::format("{}: {} lies inside the input store {}; writing there would break it",
                             out.option, o.text, in.text));
   }

@@ -24,7 +24,7 @@ struct Output {
 
 // Fails, with a one-line error naming the option, when an output
 // - is an input (same resolved path, or the same file through a hard link),
-// - lies inside an input directory (a store: writing there breaks it),
+// - lies inside an input store (writing there breaks it),
 // - is a store that would contain an input,
 // - is an existing device, FIFO, socket or directory where a file is written,
 // - is the same path as another output.

@@ -1,6 +1,7 @@
 #include "render_setup.h"
 
 #include <cstdio>
+#include <limits>
 
 #include <fmt/format.h>
 
@@ -93,6 +94,8 @@ lod::SelectionOptions selection_options(const RenderSetup& setup) {
 
 namespace {
 
+constexpr double kNoLowerBound = std::numeric_limits<double>::lowest();
+
 struct Bound {
   const char* what;
   double lo, hi;
@@ -110,8 +113,11 @@ Status check_bounds(const char* option, const std::vector<double>& v,
   size_t i = 0;
   for (const Bound& b : bounds) {
     if (!b.holds(v[i])) {
-      return fail(fmt::format("{}: {} {} is not in {}{}, {}{}", option, b.what, v[i],
-                              b.lo_open ? '(' : '[', b.lo, b.hi, b.hi_open ? ')' : ']'));
+      const std::string allowed = b.lo == kNoLowerBound
+                                      ? fmt::format("at most {}", b.hi)
+                                      : fmt::format("in {}{}, {}{}", b.lo_open ? '(' : '[', b.lo,
+                                                    b.hi, b.hi_open ? ')' : ']');
+      return fail(fmt::format("{}: {} {} is not {}", option, b.what, v[i], allowed));
     }
     ++i;
   }
@@ -133,8 +139,8 @@ double normalized_longitude(double lon) {
 Result<lod::Camera> parse_camera(const Args& args, const RenderSetup& s) {
   if (auto c = args.get("--camera")) {
     auto v = RELIEF_TRY(parse_numbers("--camera", *c, 6));
-    // At -1000 m and below the eye is inside the ellipsoid (lod::make_view).
-    const Bound height{"height (m)", -1000, kFarthest, true};
+    // Heights below -1000 m (inside the ellipsoid) are refused by lod::make_view.
+    const Bound height{"height (m)", kNoLowerBound, kFarthest};
     RELIEF_CHECK(
         check_bounds("--camera", v, {kLon, kLat, height, kHeading, kPitch, {"roll", -180, 180}}));
     return lod::Camera{
