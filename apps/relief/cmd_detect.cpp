@@ -4,6 +4,7 @@
 
 #include "args.h"
 #include "commands.h"
+#include "output_safety.h"
 #include "relief/ingest/detect_targets.h"
 
 namespace relief::cli {
@@ -78,6 +79,12 @@ int run_detect(const std::vector<std::string>& argv) {
       return report_error("--analyse: '" + *at + "' is not X,Y in pixels");
     }
     o.analyse_at = std::pair{x, y};
+  }
+  std::vector<Output> outputs = {{"-o", o.geojson.string()}};
+  if (!o.analysis_json.empty()) outputs.push_back({"--analysis", o.analysis_json.string()});
+  if (!o.analysis_png.empty()) outputs.push_back({"--plot", o.analysis_png.string()});
+  if (auto safe = check_outputs_spare_inputs(outputs, {o.input}); !safe) {
+    return report_error(safe.error().message);
   }
   auto half = args->get_int("--half-length", 4, 1000);
   if (!half) return report_error(half.error().message);

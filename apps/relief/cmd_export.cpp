@@ -5,6 +5,7 @@
 
 #include "args.h"
 #include "commands.h"
+#include "output_safety.h"
 #include "relief/ingest/export.h"
 
 namespace relief::cli {
@@ -49,6 +50,10 @@ int run_export(const std::vector<std::string>& argv) {
   }
   if (!args->get("--output")) return report_error("export: -o OUT.tif is required");
   o.output = *args->get("--output");
+  if (auto safe = check_outputs_spare_inputs({{"-o", o.output.string()}}, {o.store.string()});
+      !safe) {
+    return report_error(safe.error().message);
+  }
   auto progress =
       args->has("--quiet") ? std::make_unique<NullProgress>() : make_progress_for_stderr();
   auto report = ingest::export_geotiff(o, *progress);

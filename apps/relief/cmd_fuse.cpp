@@ -2,6 +2,7 @@
 
 #include "args.h"
 #include "commands.h"
+#include "output_safety.h"
 #include "relief/pipeline/fuse_stores.h"
 
 namespace relief::cli {
@@ -36,6 +37,11 @@ int run_fuse(const std::vector<std::string>& argv) {
   pipeline::FuseOptions o;
   for (const auto& p : args->positional()) o.inputs.emplace_back(p);
   o.output = *args->get("--output");
+  if (auto safe = check_outputs_spare_inputs({{"-o", o.output.string(), OutputKind::Store}},
+                                             args->positional());
+      !safe) {
+    return report_error(safe.error().message);
+  }
   if (auto w = args->get("--weights")) {
     auto weights = parse_numbers("--weights", *w);
     if (!weights) return report_error(weights.error().message);

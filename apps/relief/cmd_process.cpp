@@ -6,6 +6,7 @@
 
 #include "args.h"
 #include "commands.h"
+#include "output_safety.h"
 #include "relief/base/units.h"
 #include "relief/ingest/process_raster.h"
 #include "relief/pipeline/process_store.h"
@@ -100,7 +101,12 @@ int run_process(const std::vector<std::string>& argv) {
   ThreadExecutor executor(threads->value_or(0));
   auto progress =
       args->has("--quiet") ? std::make_unique<NullProgress>() : make_progress_for_stderr();
-  if (std::filesystem::is_directory(o.input)) {
+  const bool store_input = std::filesystem::is_directory(o.input);
+  const Output output{"-o", o.output.string(), store_input ? OutputKind::Store : OutputKind::File};
+  if (auto safe = check_outputs_spare_inputs({output}, {o.input}); !safe) {
+    return report_error(safe.error().message);
+  }
+  if (store_input) {
     pipeline::ProcessStoreOptions so{o.input, o.output, o.op, o.params};
     if (args->get("--memory")) so.memory_budget = o.memory_budget / 2;
     auto r = pipeline::process_store(so, executor, *progress);

@@ -5,6 +5,7 @@
 
 #include "args.h"
 #include "commands.h"
+#include "output_safety.h"
 #include "relief/lod/selection.h"
 #include "relief/render/terrain_renderer.h"
 #include "render_path.h"
@@ -65,6 +66,22 @@ path options:
   --events FILE      every tile lifecycle event as JSON lines
   --no-frames        do not write frame images (statistics only)
 )";
+
+// What a render reads and writes, for the check that no output replaces an input.
+Status check_render_outputs(const Args& args) {
+  std::vector<std::string> inputs = args.positional();
+  for (const char* name : {"--imagery", "--path"}) {
+    if (auto p = args.get(name)) inputs.push_back(*p);
+  }
+  const bool path = args.get("--path").has_value();
+  std::vector<Output> outputs = {
+      {"-o", *args.get("--output"), path ? OutputKind::Directory : OutputKind::File}};
+  for (const char* name : {"--stats", "--events"}) {
+    if (auto p = args.get(name)) outputs.push_back({name, *p});
+  }
+  if (auto p = args.get("--cache")) outputs.push_back({"--cache", *p, OutputKind::Directory});
+  return check_outputs_spare_inputs(outputs, inputs);
+}
 
 nlohmann::json stats_json(const lod::Selection& s, const render::FrameStats& f) {
   nlohmann::json levels = nlohmann::json::object();
@@ -176,6 +193,7 @@ int run_render(const std::vector<std::string>& argv) {
   if (args->get("--path") && (args->get("--camera") || args->get("--look-at"))) {
     return report_error("render: --path replaces --camera and --look-at");
   }
+  if (auto safe = check_render_outputs(*args); !safe) return report_error(safe.error().message);
   auto setup = parse_render_setup(*args);
   if (!setup) return report_error(setup.error().message);
   if (args->get("--path")) return render_path(*args, *setup);

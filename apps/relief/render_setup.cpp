@@ -1,6 +1,7 @@
 #include "render_setup.h"
 
 #include <cstdio>
+#include <limits>
 
 #include <fmt/format.h>
 
@@ -91,14 +92,66 @@ lod::SelectionOptions selection_options(const RenderSetup& setup) {
   return so;
 }
 
+namespace {
+
+constexpr double kNoLowerBound = std::numeric_limits<double>::lowest();
+
+struct Bound {
+  const char* what;
+  double lo, hi;
+  bool lo_open = false, hi_open = false;  // whether lo, hi themselves are excluded
+
+  bool holds(double v) const {
+    return (lo_open ? v > lo : v >= lo) && (hi_open ? v < hi : v <= hi);  // false for NaN
+  }
+};
+
+// Each value of `v` within its bound; a value outside is a typo or a unit
+// mix-up (radians, lat/lon swapped), named in the error rather than rendered.
+Status check_bounds(const char* option, const std::vector<double>& v,
+                    std::initializer_list<Bound> bounds) {
+  size_t i = 0;
+  for (const Bound& b : bounds) {
+    if (!b.holds(v[i])) {
+      const std::string allowed = b.lo == kNoLowerBound
+                                      ? fmt::format("at most {}", b.hi)
+                                      : fmt::format("in {}{}, {}{}", b.lo_open ? '(' : '[', b.lo,
+                                                    b.hi, b.hi_open ? ')' : ']');
+      return fail(fmt::format("{}: {} {} is not {}", option, b.what, v[i], allowed));
+    }
+    ++i;
+  }
+  return {};
+}
+
+// Longitudes may be given in [-180, 360): 0-360 is common for global data.
+constexpr Bound kLon{"longitude", -180, 360, false, true}, kLat{"latitude", -90, 90};
+constexpr Bound kHeading{"heading", -360, 360}, kPitch{"pitch", -90, 90};
+// Heights and ranges up to 100 000 km: the whole Earth fits the view well before.
+constexpr double kFarthest = 1e8;
+
+double normalized_longitude(double lon) {
+  return lon > 180 ? lon - 360 : lon;
+}
+
+}  // namespace
+
 Result<lod::Camera> parse_camera(const Args& args, const RenderSetup& s) {
   if (auto c = args.get("--camera")) {
     auto v = RELIEF_TRY(parse_numbers("--camera", *c, 6));
-    return lod::Camera{v[0], v[1], v[2], v[3], v[4], v[5], s.fov, s.width, s.height};
+    // Heights below -1000 m (inside the ellipsoid) are refused by lod::make_view.
+    const Bound height{"height (m)", kNoLowerBound, kFarthest};
+    RELIEF_CHECK(
+        check_bounds("--camera", v, {kLon, kLat, height, kHeading, kPitch, {"roll", -180, 180}}));
+    return lod::Camera{
+        normalized_longitude(v[0]), v[1], v[2], v[3], v[4], v[5], s.fov, s.width, s.height};
   }
   auto v = RELIEF_TRY(parse_numbers("--look-at", *args.get("--look-at"), 6));
-  if (!(v[3] > 0)) return fail("--look-at: the range must be > 0");
-  return lod::look_at(v[0], v[1], v[2], v[3], v[4], v[5], s.fov, s.width, s.height);
+  // Targets as deep as the ocean floor (bathymetry), seen from any positive range.
+  const Bound height{"height (m)", -12000, kFarthest}, range{"range (m)", 0, kFarthest, true};
+  RELIEF_CHECK(check_bounds("--look-at", v, {kLon, kLat, height, range, kHeading, kPitch}));
+  return lod::look_at(normalized_longitude(v[0]), v[1], v[2], v[3], v[4], v[5], s.fov, s.width,
+                      s.height);
 }
 
 Status write_png(const std::string& path, std::span<const uint8_t> rgba, int width, int height) {

@@ -1,6 +1,7 @@
 #include "relief/base/file_io.h"
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <fmt/format.h>
@@ -47,6 +48,27 @@ bool is_temporary_file(const fs::path& path) {
 
 namespace {
 
+const char* file_type_name(mode_t mode) {
+  if (S_ISDIR(mode)) return "a directory";
+  if (S_ISCHR(mode)) return "a character device";
+  if (S_ISBLK(mode)) return "a block device";
+  if (S_ISFIFO(mode)) return "a FIFO";
+  if (S_ISSOCK(mode)) return "a socket";
+  return "not a regular file";
+}
+
+}  // namespace
+
+Status check_replaceable(const fs::path& path) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) return {};  // absent (or a dangling symlink): created anew
+  if (S_ISREG(st.st_mode)) return {};
+  return fail(fmt::format("{}: is {}, not a regular file; refusing to replace it", path.string(),
+                          file_type_name(st.st_mode)));
+}
+
+namespace {
+
 std::string temp_name(const fs::path& path) {
   static std::atomic<unsigned> counter{0};
   return fmt::format("{}{}{}.{}", path.string(), kTempMarker, ::getpid(), counter.fetch_add(1));
@@ -68,6 +90,7 @@ Status write_all(int fd, std::span<const std::byte> bytes, const std::string& na
 }  // namespace
 
 Status write_file_atomic(const fs::path& path, std::span<const std::byte> bytes, bool durable) {
+  RELIEF_CHECK(check_replaceable(path));
   std::error_code ec;
   if (path.has_parent_path()) {
     fs::create_directories(path.parent_path(), ec);
@@ -86,6 +109,8 @@ Status write_file_atomic(const fs::path& path, std::span<const std::byte> bytes,
   if (::close(fd) != 0 && status) {
     status = fail(fmt::format("{}: close failed: {}", path.string(), errno_text(errno)));
   }
+  // Checked again just before the rename: the target may have appeared meanwhile.
+  if (status) status = check_replaceable(path);
   if (status && ::rename(tmp.c_str(), path.c_str()) != 0) {
     status = fail(fmt::format("{}: rename failed: {}", path.string(), errno_text(errno)));
   }

@@ -14,6 +14,8 @@
 #include <cstring>
 #include <mutex>
 
+#include "relief/base/file_io.h"
+
 namespace relief::ingest {
 
 void init_gdal() {
@@ -51,6 +53,10 @@ std::optional<std::string> finish_atomic_write(Dataset& out, const std::string& 
   if (CPLGetLastErrorType() >= CE_Failure) {
     ::unlink(tmp.c_str());
     return final_path + ": write failed: " + gdal_error("GTiff");
+  }
+  if (auto replaceable = check_replaceable(final_path); !replaceable) {
+    ::unlink(tmp.c_str());
+    return replaceable.error().message;
   }
   if (::rename(tmp.c_str(), final_path.c_str()) != 0) {
     const std::string reason = std::strerror(errno);

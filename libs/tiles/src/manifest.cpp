@@ -118,6 +118,7 @@ Result<Manifest> Manifest::from_json(const std::string& text, const std::string&
                            src.at("bands").get<int>(), src.at("data_type").get<std::string>()});
     }
     m.created_by = j.value("created_by", "");
+    RELIEF_CHECK(check_consistency(m, name));
     return m;
   } catch (const json::exception& ex) {
     return fail(fmt::format("{}: invalid manifest: {}", name, ex.what()));

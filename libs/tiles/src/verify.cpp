@@ -42,6 +42,16 @@ VerifyReport verify_store(const fs::path& root, Executor& executor, Progress& pr
   for (int level = store->manifest().min_level; level <= store->manifest().max_level; ++level) {
     for (const auto& e : store->index(level).entries()) indexed.push_back(e);
   }
+  // The manifest's statistics are those of the finest level's tiles.
+  uint64_t finest_valid = 0;
+  for (const auto& e : store->index(store->manifest().max_level).entries()) {
+    finest_valid += e.valid_count;
+  }
+  if (finest_valid != store->manifest().stats.valid_count) {
+    report.problems.push_back(fmt::format(
+        "{}: statistics count {} valid samples, the finest level's index {}",
+        (root / kManifestName).string(), store->manifest().stats.valid_count, finest_valid));
+  }
   for (const auto& e : indexed) {
     if (!on_disk.count(e.key)) {
       report.problems.push_back(fmt::format("{}: tile {} is in the index but missing",

@@ -15,9 +15,15 @@ namespace relief {
 Result<std::vector<std::byte>> read_file(const std::filesystem::path& path);
 Result<std::string> read_text_file(const std::filesystem::path& path);
 
+// Whether a rename may replace `path`: it is absent, or a regular file (through
+// symlinks). A device node, FIFO, socket or directory is refused with a one-line
+// error, so no writer ever swaps /dev/null for a file or replaces a named pipe.
+Status check_replaceable(const std::filesystem::path& path);
+
 // Writes `bytes` to `path` atomically, creating parent directories. The rename
 // makes the write atomic against a killed process; `durable` adds an fsync so it
-// also survives a power cut (used for manifests, not for every tile).
+// also survives a power cut (used for manifests, not for every tile). Refuses a
+// `path` that check_replaceable refuses.
 Status write_file_atomic(const std::filesystem::path& path, std::span<const std::byte> bytes,
                          bool durable = false);
 Status write_text_file_atomic(const std::filesystem::path& path, std::string_view text,

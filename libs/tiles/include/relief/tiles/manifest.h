@@ -40,7 +40,12 @@ struct Manifest {
 
   std::string nodata_description() const;
   std::string to_json() const;
+  // Parses and checks the manifest (see check_consistency); errors start with `name`.
   static Result<Manifest> from_json(const std::string& text, const std::string& name);
 };
+
+// Whether the fields agree with each other: kind and sample type (imagery is
+// uint8 RGBA, elevation and SAR float32), bands, codec, extent, statistics.
+Status check_consistency(const Manifest& m, const std::string& name);
 
 }  // namespace relief::tiles

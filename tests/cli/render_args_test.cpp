@@ -1,0 +1,69 @@
+// `relief render` refuses impossible camera values and sizes with a one-line
+// error naming the argument, before rendering or writing anything.
+#include <gtest/gtest.h>
+
+#include "test_support.h"
+
+namespace relief::testing {
+namespace {
+namespace fs = std::filesystem;
+
+class RenderArgs : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new ScratchDir("render_args");
+    store_ = (dir_->path() / "pyr").string();
+    ASSERT_EQ(run_relief({"build", data("srtm/N42E001.hgt.zip"), "--kind", "elevation", "-o",
+                          store_, "--min-level", "8", "-q"})
+                  .exit_code,
+              0);
+  }
+  static void TearDownTestSuite() {
+    delete dir_;
+    dir_ = nullptr;
+  }
+  static inline ScratchDir* dir_ = nullptr;
+  static inline std::string store_;
+};
+
+TEST_F(RenderArgs, ImpossibleCameraValuesNameTheArgument) {
+  const std::string out = (dir_->path() / "frame.png").string();
+  struct Case {
+    std::vector<std::string> args;
+    std::string needle;
+  };
+  const std::vector<Case> cases = {
+      {{"--look-at", "1.5,200,1000,20000,0,-30"}, "--look-at: latitude 200"},
+      {{"--look-at", "1.5,-91,1000,20000,0,-30"}, "--look-at: latitude -91"},
+      {{"--look-at", "400,42.5,1000,20000,0,-30"}, "--look-at: longitude 400"},
+      {{"--look-at", "360,42.5,1000,20000,0,-30"}, "--look-at: longitude 360"},
+      {{"--look-at", "-181,42.5,1000,20000,0,-30"}, "--look-at: longitude -181"},
+      {{"--look-at", "1.5,42.5,1000,-20000,0,-30"}, "--look-at: range"},
+      {{"--look-at", "1.5,42.5,1000,1e12,0,-30"}, "--look-at: range"},
+      {{"--look-at", "1.5,42.5,1000,20000,0,-120"}, "--look-at: pitch"},
+      {{"--look-at", "1.5,42.5,1000,20000,1e9,-30"}, "--look-at: heading"},
+      {{"--look-at", "nan,42.5,1000,20000,0,-30"}, "--look-at"},
+      {{"--camera", "1.5,200,5000,0,-30,0"}, "--camera: latitude 200"},
+      {{"--camera", "1.5,42.5,1e30,0,-30,0"}, "--camera: height"},
+      {{"--camera", "1.5,42.5,5000,0,-300,0"}, "--camera: pitch -300"},
+      {{"--camera", "1.5,42.5,5000,0,-30,720"}, "--camera: roll 720"},
+      {{"--camera", "1.5,42.5,inf,0,-30,0"}, "--camera"},
+      {{"--camera", "1.5,42.5,5000,0,-30,0", "--fov", "0"}, "--fov"},
+      {{"--camera", "1.5,42.5,5000,0,-30,0", "--fov", "180"}, "--fov"},
+      {{"--camera", "1.5,42.5,5000,0,-30,0", "--fov", "nan"}, "--fov"},
+      {{"--camera", "1.5,42.5,5000,0,-30,0", "--size", "0x0"}, "--size"},
+      {{"--camera", "1.5,42.5,5000,0,-30,0", "--size", "100000x100000"}, "--size"},
+  };
+  for (const auto& c : cases) {
+    std::vector<std::string> args = {"render", store_, "-o", out};
+    args.insert(args.end(), c.args.begin(), c.args.end());
+    if (c.needle != "--size") args.insert(args.end(), {"--size", "32x24"});
+    auto r = run_relief(args, kNoMesaLeakReport);
+    EXPECT_TRUE(is_one_line_error(r, c.needle))
+        << c.args.front() << " " << c.args[1] << ": exit " << r.exit_code << ", " << r.err;
+  }
+  EXPECT_FALSE(fs::exists(out));
+}
+
+}  // namespace
+}  // namespace relief::testing
