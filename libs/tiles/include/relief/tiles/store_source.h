@@ -5,11 +5,13 @@
 #include <cstddef>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
 
 #include "relief/base/result.h"
+#include "relief/tiles/tile_file.h"
 
 namespace relief::tiles {
 
@@ -25,6 +27,16 @@ class StoreSource {
   // (checksums of tiles and indices, JSON of the manifest).
   static Status verify(const std::string& relative, std::span<const std::byte> bytes);
 };
+
+// The largest a store file of that name may be, so that sources can refuse a
+// larger one (a hostile server's endless body) before holding it: a manifest
+// kMaxManifestBytes; a level index the size it has with every tile of its
+// level present, at most kMaxLevelIndexBytes; a tile max_tile_file_bytes of
+// the store's tile shape, or before the manifest is known, of the largest
+// shape a manifest may declare.
+inline constexpr uint64_t kMaxManifestBytes = uint64_t{16} << 20;
+inline constexpr uint64_t kMaxLevelIndexBytes = uint64_t{256} << 20;
+uint64_t max_file_bytes(const std::string& relative, const std::optional<TileShape>& shape);
 
 // A store directory on the local file system.
 std::shared_ptr<const StoreSource> local_source(const std::filesystem::path& root);
