@@ -3,6 +3,7 @@
 // shape before anything is allocated, and a codec payload whose own sizes
 // disagree with its header is refused too.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cmath>
@@ -13,6 +14,7 @@
 #include "relief/base/memory_use.h"
 #include "relief/base/parallel.h"
 #include "relief/base/progress.h"
+#include "relief/base/units.h"
 #include "relief/tiles/store.h"
 #include "relief/tiles/store_layout.h"
 #include "relief/tiles/tile_file.h"
@@ -142,24 +144,35 @@ TEST(ForgedTile, TheLargestTileFileCoversEveryCodecsWorstCase) {
             80 + 2 * 530 * 274 * 4 + kMiB);
 }
 
-// A one-tile store on disk whose tile was forged: reading and verifying it
-// fail with the tile's path, without allocating for the forged size.
-TEST(ForgedTile, StoresRefuseForgedTilesWhenReadingAndVerifying) {
-  const fs::path root = fs::temp_directory_path() / ("relief_forged_" + std::to_string(::getpid()));
+// A one-tile store of 64 x 32 tiles with a border of 8 under `root`, its tile
+// file `tile` (a real tile, or forged); returns the tile's key.
+geo::TileKey one_tile_store(const fs::path& root, const std::vector<std::byte>& tile) {
   fs::remove_all(root);
   const geo::TileKey key{0, 0, 0};
   auto bytes = *encode_tile(testing::terrain(80, 48), 8, {Codec::Zstd});
   const TileHeader h = *parse_tile_header(bytes, "t");
-  ASSERT_TRUE(write_tile_file(root, key, huge(bytes)));
+  EXPECT_TRUE(write_tile_file(root, key, tile.empty() ? bytes : tile));
   LevelIndex index(0);
   index.add(index_entry_for(key, h, bytes.size()));
-  ASSERT_TRUE(write_level_index(root, index));
+  EXPECT_TRUE(write_level_index(root, index));
   Manifest m;
   m.tile_log2_height = 5;
   m.border = 8;
   m.extent = {-180, -90, 180, 90};
-  ASSERT_TRUE(write_manifest(root, m));
+  EXPECT_TRUE(write_manifest(root, m));
+  return key;
+}
 
+fs::path scratch_root(const std::string& name) {
+  return fs::temp_directory_path() / fmt::format("relief_{}_{}", name, ::getpid());
+}
+
+// A store on disk whose tile was forged: reading and verifying it fail with
+// the tile's path, without allocating for the forged size.
+TEST(ForgedTile, StoresRefuseForgedTilesWhenReadingAndVerifying) {
+  const fs::path root = scratch_root("forged");
+  const geo::TileKey key =
+      one_tile_store(root, huge(*encode_tile(testing::terrain(80, 48), 8, {Codec::Zstd})));
   const uint64_t rss_before = resident_set_bytes();
   auto store = Store::open(root);
   ASSERT_TRUE(store) << store.error().message;
@@ -176,6 +189,34 @@ TEST(ForgedTile, StoresRefuseForgedTilesWhenReadingAndVerifying) {
   ASSERT_EQ(report.problems.size(), 1u);
   EXPECT_EQ(report.problems[0], tile.error().message);
   EXPECT_LT(resident_set_bytes(), rss_before + 64 * kMiB);
+  fs::remove_all(root);
+}
+
+// A tile file far larger than any tile of the store can be (sparse: it costs
+// no disk), or a FIFO that would block a reader forever: errors before reading.
+TEST(ForgedTile, HugeOrSpecialTileFilesAreNotRead) {
+  const fs::path root = scratch_root("huge_file");
+  const geo::TileKey key = one_tile_store(root, {});
+  const fs::path path = root / tile_relative_path(key);
+  auto store = Store::open(root);
+  ASSERT_TRUE(store) << store.error().message;
+  ASSERT_TRUE(store->read_tile(key));
+  const uint64_t cap = max_tile_file_bytes(store->tile_shape());
+
+  fs::resize_file(path, uint64_t{1} << 30);
+  const uint64_t rss_before = resident_set_bytes();
+  auto huge_file = store->read_tile(key);
+  ASSERT_FALSE(huge_file);
+  EXPECT_EQ(huge_file.error().message,
+            fmt::format("{}: 1073741824 bytes, larger than {}, the most this file can be",
+                        path.string(), format_bytes(cap)));
+  EXPECT_LT(resident_set_bytes(), rss_before + 64 * kMiB);
+
+  fs::remove(path);
+  ASSERT_EQ(::mkfifo(path.c_str(), 0600), 0);
+  auto fifo = store->read_tile(key);
+  ASSERT_FALSE(fifo);
+  EXPECT_EQ(fifo.error().message, path.string() + ": not a regular file");
   fs::remove_all(root);
 }
 

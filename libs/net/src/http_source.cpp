@@ -5,13 +5,11 @@
 #include <atomic>
 #include <chrono>
 #include <mutex>
-#include <optional>
 #include <thread>
 
 #include <fmt/format.h>
 
 #include "relief/base/units.h"
-#include "relief/tiles/store.h"
 #include "relief/tiles/store_layout.h"
 
 namespace relief::net {
@@ -70,7 +68,9 @@ class CurlHttpSource final : public HttpSource {
     } else {
       first = std::hash<std::string>()(relative) % n;
     }
-    const uint64_t cap = tiles::max_file_bytes(relative, tile_shape());
+    // Tiles are capped by the shape of the store whose manifest came through
+    // here (a Store fetches it first).
+    const uint64_t cap = caps_.cap(relative);
     std::string last_error;
     for (size_t k = 0; k < (pinned ? 1 : n); ++k) {
       if (k > 0) ++failovers_;
@@ -87,7 +87,7 @@ class CurlHttpSource final : public HttpSource {
         if (a.error.empty()) {
           if (auto ok = tiles::StoreSource::verify(relative, a.body); ok) {
             bytes_ += a.body.size();
-            if (relative == tiles::kManifestName) learn_tile_shape(a.body);
+            caps_.learn(relative, a.body);
             return std::move(a.body);
           } else {
             ++rejected_;
@@ -115,21 +115,6 @@ class CurlHttpSource final : public HttpSource {
   void give_back(CURL* h) const {
     std::lock_guard lock(mutex_);
     handles_.push_back(h);
-  }
-
-  // Tiles are capped by the shape of the store whose manifest came through
-  // this source (a Store always fetches it first).
-  std::optional<tiles::TileShape> tile_shape() const {
-    std::lock_guard lock(mutex_);
-    return shape_;
-  }
-  void learn_tile_shape(std::span<const std::byte> manifest) const {
-    const std::string text(reinterpret_cast<const char*>(manifest.data()), manifest.size());
-    auto m = tiles::Manifest::from_json(text, tiles::kManifestName);
-    if (!m) return;
-    auto shape = tiles::tile_shape_of(*m);
-    std::lock_guard lock(mutex_);
-    if (shape) shape_ = *shape;
   }
 
   Attempt get(const std::string& url, uint64_t cap) const {
@@ -170,7 +155,7 @@ class CurlHttpSource final : public HttpSource {
   HttpOptions o_;
   mutable std::mutex mutex_;
   mutable std::vector<CURL*> handles_;
-  mutable std::optional<tiles::TileShape> shape_;
+  mutable tiles::FileCaps caps_;
   mutable std::atomic<uint64_t> requests_{0}, retries_{0}, failovers_{0}, bytes_{0}, rejected_{0};
 };
 
