@@ -85,11 +85,12 @@ TEST_F(DiskCacheTest, HitsBudgetRepairAndRestart) {
   {
     auto cache = net::DiskCache::create(upstream, cache_dir.path(), budget);
     ASSERT_TRUE(cache);
+    EXPECT_EQ(upstream->requests, 1);  // the manifest, which keys the cache
     auto first = (*cache)->fetch(paths[0]);
     auto again = (*cache)->fetch(paths[0]);
     ASSERT_TRUE(first && again);
     EXPECT_EQ(*first, *again);
-    EXPECT_EQ(upstream->requests, 1);
+    EXPECT_EQ(upstream->requests, 2);
     EXPECT_EQ((*cache)->stats().hits, 1u);
     // The budget holds while many files pass through.
     for (const auto& p : paths) {
@@ -101,7 +102,8 @@ TEST_F(DiskCacheTest, HitsBudgetRepairAndRestart) {
     // A damaged cached file is detected and fetched anew.
     const std::string last = paths.back();
     {
-      std::fstream f(cache_dir / last, std::ios::in | std::ios::out | std::ios::binary);
+      std::fstream f((*cache)->store_directory() / last,
+                     std::ios::in | std::ios::out | std::ios::binary);
       f.seekp(-1, std::ios::end);
       f.put('\x7f');
     }
@@ -112,11 +114,12 @@ TEST_F(DiskCacheTest, HitsBudgetRepairAndRestart) {
     EXPECT_EQ((*cache)->stats().repaired, 1u);
     EXPECT_TRUE(tiles::StoreSource::verify(last, *healed));
   }
-  // A new cache over the same directory starts with what is there.
+  // A new cache over the same directory starts with what is there (only the
+  // manifest is fetched anew).
   const int before = upstream->requests;
   auto reopened = net::DiskCache::create(upstream, cache_dir.path(), budget);
   ASSERT_TRUE((*reopened)->fetch(paths.back()));
-  EXPECT_EQ(upstream->requests, before);
+  EXPECT_EQ(upstream->requests, before + 1);
   EXPECT_EQ((*reopened)->stats().hits, 1u);
 }
 
@@ -124,6 +127,8 @@ TEST_F(DiskCacheTest, ConcurrentRequestsShareOneFetch) {
   ScratchDir cache_dir("disk_cache_shared");
   auto upstream = std::make_shared<CountingSource>(store());
   auto cache = net::DiskCache::create(upstream, cache_dir.path(), uint64_t{64} << 20);
+  ASSERT_TRUE(cache);
+  const int before = upstream->requests;
   const std::string path = tile_paths()[3];
   upstream->set_open(false);  // the first fetch stays in flight until all have asked
   std::vector<std::thread> threads;
@@ -138,7 +143,7 @@ TEST_F(DiskCacheTest, ConcurrentRequestsShareOneFetch) {
   for (auto& t : threads) t.join();
   ASSERT_TRUE(all_asked);
   EXPECT_EQ(good.load(), 8);
-  EXPECT_EQ(upstream->requests, 1);  // the seven others waited for the one in flight
+  EXPECT_EQ(upstream->requests, before + 1);  // the seven others waited for the one in flight
   EXPECT_EQ((*cache)->stats().shared, 7u);
 }
 

@@ -12,7 +12,7 @@ TEST(TileFile, RoundTripWithInteriorStatistics) {
   r.f32()[0] = -99999.0f;  // in the border: must not count in the statistics
   auto bytes = encode_tile(r, 9, {Codec::Zstd});
   ASSERT_TRUE(bytes);
-  auto tile = decode_tile(*bytes, "t");
+  auto tile = decode_tile(*bytes, "t", {SampleType::Float32, 1, 530, 274, 9});
   ASSERT_TRUE(tile) << tile.error().message;
   EXPECT_EQ(tile->header.width, 530);
   EXPECT_EQ(tile->header.interior_width(), 512);
@@ -28,7 +28,7 @@ TEST(TileFile, LercBoundsCoverTheDecodedValues) {
   const Raster r = testing::terrain(530, 274);
   auto bytes = encode_tile(r, 9, {Codec::Lerc, 1.0});
   ASSERT_TRUE(bytes);
-  auto tile = decode_tile(*bytes, "t");
+  auto tile = decode_tile(*bytes, "t", {SampleType::Float32, 1, 530, 274, 9});
   ASSERT_TRUE(tile);
   const SampleStats s = tile->raster.stats(9, 9, 512, 256);
   EXPECT_LE(tile->header.stats.min, s.min);
@@ -38,7 +38,7 @@ TEST(TileFile, LercBoundsCoverTheDecodedValues) {
 TEST(TileFile, DetectsEveryKindOfDamage) {
   auto bytes = *encode_tile(testing::terrain(64, 32), 4, {Codec::Zstd});
   auto expect_error = [](std::vector<std::byte> b, const std::string& what) {
-    auto t = decode_tile(b, "x/y.rtile");
+    auto t = decode_tile(b, "x/y.rtile", {SampleType::Float32, 1, 64, 32, 4});
     ASSERT_FALSE(t) << what;
     EXPECT_NE(t.error().message.find("x/y.rtile"), std::string::npos);
     EXPECT_NE(t.error().message.find(what), std::string::npos) << t.error().message;

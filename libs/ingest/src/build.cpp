@@ -240,7 +240,9 @@ class Builder {
         type_(o.kind == tiles::DatasetKind::Imagery ? tiles::SampleType::UInt8
                                                     : tiles::SampleType::Float32),
         groups_(group_sources(sources_)),
-        cores_(o.output / kBuildDir / "cores", memory.core_cache) {}
+        cores_(o.output / kBuildDir / "cores",
+               {type_, type_ == tiles::SampleType::UInt8 ? 4 : 1, grid.width(), grid.height(), 0},
+               memory.core_cache) {}
 
   Result<BuildReport> run() {
     const auto start = std::chrono::steady_clock::now();

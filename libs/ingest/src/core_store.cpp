@@ -11,8 +11,9 @@
 namespace relief::ingest {
 namespace fs = std::filesystem;
 
-CoreStore::CoreStore(fs::path dir, uint64_t cache_budget_bytes)
+CoreStore::CoreStore(fs::path dir, tiles::TileShape shape, uint64_t cache_budget_bytes)
     : dir_(std::move(dir)),
+      shape_(shape),
       cache_(cache_budget_bytes, [](const tiles::Raster& r) { return r.byte_size(); }) {}
 
 fs::path CoreStore::path_of(const geo::TileKey& key) const {
@@ -38,7 +39,7 @@ Result<std::shared_ptr<const tiles::Raster>> CoreStore::read(const geo::TileKey&
   if (!fs::exists(path, ec)) return std::shared_ptr<const tiles::Raster>();
   auto bytes = read_file(path);
   if (!bytes) return std::unexpected(bytes.error());
-  auto tile = tiles::decode_tile(*bytes, path.string());
+  auto tile = tiles::decode_tile(*bytes, path.string(), shape_);
   if (!tile) return std::unexpected(tile.error());
   auto raster = std::make_shared<const tiles::Raster>(std::move(tile->raster));
   cache_.put(key, raster);

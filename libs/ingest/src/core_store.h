@@ -12,12 +12,14 @@
 #include "relief/base/result.h"
 #include "relief/geo/tile_key.h"
 #include "relief/tiles/raster.h"
+#include "relief/tiles/tile_file.h"
 
 namespace relief::ingest {
 
 class CoreStore {
  public:
-  CoreStore(std::filesystem::path dir, uint64_t cache_budget_bytes);
+  // Every core has `shape` (no border); a core file of another shape is an error.
+  CoreStore(std::filesystem::path dir, tiles::TileShape shape, uint64_t cache_budget_bytes);
 
   bool exists(const geo::TileKey& key) const;
   Status write(const geo::TileKey& key, const tiles::Raster& core);
@@ -29,6 +31,7 @@ class CoreStore {
  private:
   std::filesystem::path path_of(const geo::TileKey& key) const;
   std::filesystem::path dir_;
+  tiles::TileShape shape_;
   LruCache<geo::TileKey, tiles::Raster, geo::TileKeyHash> cache_;
 };
 

@@ -5,20 +5,79 @@
 #include <list>
 #include <map>
 #include <mutex>
+#include <optional>
+#include <span>
+#include <string_view>
 
 #include <fmt/format.h>
 
 #include "relief/base/file_io.h"
+#include "relief/tiles/store_layout.h"
 
 namespace relief::net {
 namespace {
 
 namespace fs = std::filesystem;
 
+// FNV-1a: the same across runs and builds, as cache keys on disk must be
+// (std::hash need not be).
+uint64_t stable_hash(std::string_view bytes) {
+  uint64_t h = 0xcbf29ce484222325ULL;
+  for (char c : bytes) {
+    h ^= static_cast<unsigned char>(c);
+    h *= 0x100000001b3ULL;
+  }
+  return h;
+}
+std::string as_text(std::span<const std::byte> bytes) {
+  return {reinterpret_cast<const char*>(bytes.data()), bytes.size()};
+}
+
+// The manifest most recently cached for a store location (under its
+// directory, one subdirectory per manifest seen there), for offline runs.
+std::optional<std::pair<fs::path, std::vector<std::byte>>> newest_cached_manifest(
+    const fs::path& location_dir) {
+  std::optional<std::pair<fs::path, std::vector<std::byte>>> newest;
+  fs::file_time_type newest_time{};
+  std::error_code ec;
+  for (auto it = fs::directory_iterator(location_dir, ec); !ec && it != fs::directory_iterator();
+       it.increment(ec)) {
+    const fs::path file = it->path() / tiles::kManifestName;
+    const auto time = fs::last_write_time(file, ec);
+    if (ec || (newest && time <= newest_time)) {
+      ec.clear();
+      continue;
+    }
+    auto bytes = read_file(file);
+    if (!bytes || !tiles::StoreSource::verify(tiles::kManifestName, *bytes)) continue;
+    newest.emplace(it->path(), std::move(*bytes));
+    newest_time = time;
+  }
+  return newest;
+}
+
 class Cache final : public DiskCache {
  public:
-  Cache(std::shared_ptr<const tiles::StoreSource> upstream, fs::path dir, uint64_t budget)
-      : upstream_(std::move(upstream)), dir_(std::move(dir)), budget_(budget) {}
+  // Files of this store live under dir/store_rel; the manifest is the one
+  // that named them.
+  Cache(std::shared_ptr<const tiles::StoreSource> upstream, fs::path dir, uint64_t budget,
+        fs::path store_rel, std::vector<std::byte> manifest)
+      : upstream_(std::move(upstream)),
+        dir_(std::move(dir)),
+        budget_(budget),
+        store_rel_(std::move(store_rel)),
+        manifest_(std::move(manifest)) {}
+
+  fs::path store_directory() const override { return dir_ / store_rel_; }
+
+  // Keeps the manifest beside the store's files, for offline runs.
+  void keep_manifest() {
+    const std::string key = (store_rel_ / tiles::kManifestName).generic_string();
+    if (write_file_atomic(dir_ / key, manifest_)) {
+      std::lock_guard lock(mutex_);
+      add_locked(key, manifest_.size());
+    }
+  }
 
   // Existing files, oldest first, become the initial LRU order.
   void load_existing() {
@@ -52,11 +111,14 @@ class Cache final : public DiskCache {
   }
 
   Result<std::vector<std::byte>> fetch(const std::string& rel) const override {
+    // The manifest that keys the cache is the one the store reads.
+    if (rel == tiles::kManifestName) return manifest_;
+    const std::string key = (store_rel_ / rel).generic_string();
     std::unique_lock lock(mutex_);
-    if (auto it = entries_.find(rel); it != entries_.end()) {
+    if (auto it = entries_.find(key); it != entries_.end()) {
       order_.splice(order_.begin(), order_, it->second.position);
       lock.unlock();
-      auto bytes = read_file(dir_ / rel);
+      auto bytes = read_file(dir_ / key);
       if (bytes && tiles::StoreSource::verify(rel, *bytes)) {
         std::lock_guard relock(mutex_);
         ++hits_;
@@ -64,10 +126,10 @@ class Cache final : public DiskCache {
       }
       lock.lock();  // missing or damaged: forget it and fetch anew
       ++repaired_;
-      drop_locked(rel);
+      drop_locked(key);
     }
     // One upstream fetch per file at a time; others wait for its result.
-    if (auto it = in_flight_.find(rel); it != in_flight_.end()) {
+    if (auto it = in_flight_.find(key); it != in_flight_.end()) {
       auto flight = it->second;
       ++shared_;
       ready_.wait(lock, [&] { return flight->done; });
@@ -75,25 +137,18 @@ class Cache final : public DiskCache {
       return std::unexpected(flight->result.error());
     }
     auto flight = std::make_shared<Flight>();
-    in_flight_[rel] = flight;
+    in_flight_[key] = flight;
     ++misses_;
     lock.unlock();
     Result<std::vector<std::byte>> result = upstream_->fetch(rel);
-    if (result) {
-      std::error_code ec;
-      fs::create_directories((dir_ / rel).parent_path(), ec);
-      if (write_file_atomic(dir_ / rel, *result)) {
-        std::lock_guard relock(mutex_);
-        order_.push_front(rel);
-        entries_[rel] = {result->size(), order_.begin()};
-        bytes_ += result->size();
-        evict_locked();
-      }
+    if (result && write_file_atomic(dir_ / key, *result)) {
+      std::lock_guard relock(mutex_);
+      add_locked(key, result->size());
     }
     lock.lock();
     flight->result = result;
     flight->done = true;
-    in_flight_.erase(rel);
+    in_flight_.erase(key);
     ready_.notify_all();
     return result;
   }
@@ -107,6 +162,17 @@ class Cache final : public DiskCache {
     bool done = false;
     Result<std::vector<std::byte>> result = fail("pending");
   };
+
+  void add_locked(const std::string& key, uint64_t size) const {
+    if (auto it = entries_.find(key); it != entries_.end()) {  // rewritten in place
+      bytes_ -= it->second.size;
+      order_.erase(it->second.position);
+    }
+    order_.push_front(key);
+    entries_[key] = {size, order_.begin()};
+    bytes_ += size;
+    evict_locked();
+  }
 
   void drop_locked(std::string rel) const {  // by value: it may name an order_ element
     auto it = entries_.find(rel);
@@ -128,6 +194,8 @@ class Cache final : public DiskCache {
   std::shared_ptr<const tiles::StoreSource> upstream_;
   fs::path dir_;
   uint64_t budget_;
+  fs::path store_rel_;
+  std::vector<std::byte> manifest_;
   mutable std::mutex mutex_;
   mutable std::condition_variable ready_;
   mutable std::list<std::string> order_;  // most recently used first
@@ -146,8 +214,26 @@ Result<std::shared_ptr<DiskCache>> DiskCache::create(
   if (!fs::is_directory(directory, ec)) {
     return fail(fmt::format("{}: cannot create the cache directory", directory.string()));
   }
-  auto cache = std::make_shared<Cache>(std::move(upstream), directory, budget_bytes);
+  // Keyed by the store's identity, its location and its manifest (fetched
+  // anew every time): two stores, or a store rebuilt at the same URL, never
+  // share files. When the upstream cannot be reached, the last manifest seen
+  // at that location is used, so a second run works offline.
+  const fs::path location_rel = fmt::format("{:016x}", stable_hash(upstream->name()));
+  fs::path store_rel;
+  std::vector<std::byte> manifest;
+  if (auto fresh = upstream->fetch(tiles::kManifestName)) {
+    manifest = std::move(*fresh);
+    store_rel = location_rel / fmt::format("{:016x}", stable_hash(as_text(manifest)));
+  } else if (auto cached = newest_cached_manifest(directory / location_rel)) {
+    store_rel = location_rel / cached->first.filename();
+    manifest = std::move(cached->second);
+  } else {
+    return std::unexpected(fresh.error());
+  }
+  auto cache = std::make_shared<Cache>(std::move(upstream), directory, budget_bytes,
+                                       std::move(store_rel), std::move(manifest));
   cache->load_existing();
+  cache->keep_manifest();
   return std::shared_ptr<DiskCache>(std::move(cache));
 }
 

@@ -9,6 +9,7 @@
 
 #include <fmt/format.h>
 
+#include "relief/base/units.h"
 #include "relief/tiles/store_layout.h"
 
 namespace relief::net {
@@ -18,20 +19,29 @@ struct CurlInit {
   CurlInit() { curl_global_init(CURL_GLOBAL_DEFAULT); }
 };
 
-size_t append(char* data, size_t size, size_t count, void* out) {
-  auto* body = static_cast<std::vector<std::byte>*>(out);
-  const auto* p = reinterpret_cast<const std::byte*>(data);
-  body->insert(body->end(), p, p + size * count);
-  return size * count;
-}
-
 // One attempt's outcome: bytes, or an error and whether trying again may help.
 struct Attempt {
   std::vector<std::byte> body;
+  uint64_t cap = 0;  // the largest body accepted
+  bool too_large = false;
   std::string error;
   bool retry = false;
   bool not_found = false;
 };
+
+// Appends to the body; a body growing past the cap (a chunked or lying
+// server) aborts the transfer at once (returning less than given).
+size_t append(char* data, size_t size, size_t count, void* out) {
+  auto* a = static_cast<Attempt*>(out);
+  const size_t n = size * count;
+  if (a->body.size() + n > a->cap) {
+    a->too_large = true;
+    return 0;
+  }
+  const auto* p = reinterpret_cast<const std::byte*>(data);
+  a->body.insert(a->body.end(), p, p + n);
+  return n;
+}
 
 class CurlHttpSource final : public HttpSource {
  public:
@@ -58,6 +68,9 @@ class CurlHttpSource final : public HttpSource {
     } else {
       first = std::hash<std::string>()(relative) % n;
     }
+    // Tiles are capped by the shape of the store whose manifest came through
+    // here (a Store fetches it first).
+    const uint64_t cap = caps_.cap(relative);
     std::string last_error;
     for (size_t k = 0; k < (pinned ? 1 : n); ++k) {
       if (k > 0) ++failovers_;
@@ -69,11 +82,12 @@ class CurlHttpSource final : public HttpSource {
           std::this_thread::sleep_for(std::chrono::milliseconds(backoff));
           backoff *= 2;
         }
-        Attempt a = get(base + relative);
+        Attempt a = get(base + relative, cap);
         if (a.not_found) return fail(fmt::format("{}{}: not found (404)", base, relative));
         if (a.error.empty()) {
           if (auto ok = tiles::StoreSource::verify(relative, a.body); ok) {
             bytes_ += a.body.size();
+            caps_.learn(relative, a.body);
             return std::move(a.body);
           } else {
             ++rejected_;
@@ -103,14 +117,17 @@ class CurlHttpSource final : public HttpSource {
     handles_.push_back(h);
   }
 
-  Attempt get(const std::string& url) const {
+  Attempt get(const std::string& url, uint64_t cap) const {
     ++requests_;
     CURL* h = borrow();
     Attempt a;
+    a.cap = cap;
     curl_easy_reset(h);
     curl_easy_setopt(h, CURLOPT_URL, url.c_str());
     curl_easy_setopt(h, CURLOPT_WRITEFUNCTION, append);
-    curl_easy_setopt(h, CURLOPT_WRITEDATA, &a.body);
+    curl_easy_setopt(h, CURLOPT_WRITEDATA, &a);
+    // Refuses a larger Content-Length before the body; append() checks the rest.
+    curl_easy_setopt(h, CURLOPT_MAXFILESIZE_LARGE, static_cast<curl_off_t>(cap));
     curl_easy_setopt(h, CURLOPT_CONNECTTIMEOUT_MS, o_.connect_timeout_ms);
     curl_easy_setopt(h, CURLOPT_TIMEOUT_MS, o_.timeout_ms);
     curl_easy_setopt(h, CURLOPT_NOSIGNAL, 1L);
@@ -119,7 +136,11 @@ class CurlHttpSource final : public HttpSource {
     long status = 0;
     curl_easy_getinfo(h, CURLINFO_RESPONSE_CODE, &status);
     give_back(h);
-    if (rc != CURLE_OK) {
+    if (a.too_large || rc == CURLE_FILESIZE_EXCEEDED) {
+      // Not retried: the server means it. Mirrors may still have the right file.
+      a.error =
+          fmt::format("response larger than {}, the most this file can be", format_bytes(cap));
+    } else if (rc != CURLE_OK) {
       a.error = curl_easy_strerror(rc);  // refused, timed out, truncated body, ...
       a.retry = true;
     } else if (status == 404) {
@@ -134,6 +155,7 @@ class CurlHttpSource final : public HttpSource {
   HttpOptions o_;
   mutable std::mutex mutex_;
   mutable std::vector<CURL*> handles_;
+  mutable tiles::FileCaps caps_;
   mutable std::atomic<uint64_t> requests_{0}, retries_{0}, failovers_{0}, bytes_{0}, rejected_{0};
 };
 

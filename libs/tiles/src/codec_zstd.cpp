@@ -111,11 +111,14 @@ Result<std::vector<std::byte>> encode_zstd(const Raster& r, int level) {
 }
 
 Result<Raster> decode_zstd(std::span<const std::byte> p, SampleType t, int bands, int w, int h) {
-  Raster r(t, bands, w, h);
+  // The frame's own content size must be the header's, checked before allocating.
+  const size_t expected =
+      static_cast<size_t>(w) * static_cast<size_t>(h) * static_cast<size_t>(bands) * sample_size(t);
   const unsigned long long size = ZSTD_getFrameContentSize(p.data(), p.size());
-  if (size == ZSTD_CONTENTSIZE_ERROR || size == ZSTD_CONTENTSIZE_UNKNOWN || size != r.byte_size()) {
+  if (size == ZSTD_CONTENTSIZE_ERROR || size == ZSTD_CONTENTSIZE_UNKNOWN || size != expected) {
     return fail("zstd payload is corrupt or has the wrong size");
   }
+  Raster r(t, bands, w, h);
   ThreadState& ts = thread_state();
   std::vector<uint8_t>& planes = ts.planes;
   planes.resize(r.byte_size());

@@ -30,12 +30,14 @@ Result<Store> Store::open(std::shared_ptr<const StoreSource> source) {
   auto manifest = RELIEF_TRY(Manifest::from_json(text, manifest_name));
   auto grid = geo::TileGrid::create(manifest.tile_log2_height, manifest.border);
   if (!grid) return fail(fmt::format("{}: {}", manifest_name, grid.error().message));
+  const TileShape shape = *tile_shape_of(manifest);
 
   Store store;
   store.root_ = name;
   store.source_ = std::move(source);
   store.manifest_ = std::move(manifest);
   store.grid_ = *grid;
+  store.shape_ = shape;
   for (int level = 0; level <= store.manifest_.max_level; ++level) {
     if (level < store.manifest_.min_level) {
       store.indices_.emplace_back(level);
@@ -70,14 +72,13 @@ Result<Tile> Store::read_tile(const geo::TileKey& key) const {
   }
   auto bytes = source_->fetch(tile_relative_path(key));
   if (!bytes) return std::unexpected(bytes.error());
-  auto tile = decode_tile(*bytes, path.string());
-  if (!tile) return tile;
-  const auto& h = tile->header;
-  if (h.type != manifest_.sample_type || h.interior_width() != grid_.width() ||
-      h.interior_height() != grid_.height() || h.border != grid_.border()) {
-    return fail(fmt::format("{}: tile shape or type disagrees with the manifest", path.string()));
-  }
-  return tile;
+  return decode_tile(*bytes, path.string(), shape_);
+}
+
+Result<TileShape> tile_shape_of(const Manifest& m) {
+  const auto grid = RELIEF_TRY(geo::TileGrid::create(m.tile_log2_height, m.border));
+  return TileShape{m.sample_type, m.bands, grid.padded_width(), grid.padded_height(),
+                   grid.border()};
 }
 
 Result<std::optional<float>> Store::sample(double lon, double lat, int level) const {

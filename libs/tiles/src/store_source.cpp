@@ -1,32 +1,106 @@
 #include "relief/tiles/store_source.h"
 
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstdlib>
+
 #include <fmt/format.h>
 
 #include "relief/base/file_io.h"
+#include "relief/base/units.h"
 #include "relief/tiles/level_index.h"
 #include "relief/tiles/manifest.h"
+#include "relief/tiles/store.h"
 #include "relief/tiles/store_layout.h"
 #include "relief/tiles/tile_file.h"
 
 namespace relief::tiles {
 namespace {
 
+// A regular file of at most `cap` bytes; a FIFO or device (which could block
+// or never end) or a larger file is an error before anything is read.
+Result<std::vector<std::byte>> read_capped(const std::filesystem::path& path, uint64_t cap) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
+  if (fd < 0) return fail(fmt::format("{}: cannot open: {}", path.string(), errno_text(errno)));
+  struct stat st {};
+  std::string error;
+  if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+    error = fmt::format("{}: not a regular file", path.string());
+  } else if (static_cast<uint64_t>(st.st_size) > cap) {
+    error = fmt::format("{}: {} bytes, larger than {}, the most this file can be", path.string(),
+                        st.st_size, format_bytes(cap));
+  }
+  std::vector<std::byte> bytes;
+  while (error.empty()) {
+    std::byte chunk[1 << 16];
+    const ssize_t n = ::read(fd, chunk, sizeof chunk);
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) error = fmt::format("{}: read failed: {}", path.string(), errno_text(errno));
+    if (n <= 0) break;
+    if (bytes.size() + static_cast<size_t>(n) > cap) {  // it grew while being read
+      error = fmt::format("{}: larger than {}, the most this file can be", path.string(),
+                          format_bytes(cap));
+    }
+    bytes.insert(bytes.end(), chunk, chunk + n);
+  }
+  ::close(fd);
+  if (!error.empty()) return fail(error);
+  return bytes;
+}
+
 class LocalSource final : public StoreSource {
  public:
   explicit LocalSource(std::filesystem::path root) : root_(std::move(root)) {}
   std::string name() const override { return root_.string(); }
   Result<std::vector<std::byte>> fetch(const std::string& relative) const override {
-    return read_file(root_ / relative);
+    auto bytes = RELIEF_TRY(read_capped(root_ / relative, caps_.cap(relative)));
+    caps_.learn(relative, bytes);
+    return bytes;
   }
 
  private:
   std::filesystem::path root_;
+  mutable FileCaps caps_;
 };
 
 }  // namespace
 
 std::shared_ptr<const StoreSource> local_source(const std::filesystem::path& root) {
   return std::make_shared<LocalSource>(root);
+}
+
+uint64_t max_file_bytes(const std::string& relative, const std::optional<TileShape>& shape) {
+  if (relative == kManifestName) return kMaxManifestBytes;
+  if (relative.ends_with(kTileExtension)) {
+    if (shape) return max_tile_file_bytes(*shape);
+    // 2^13 x 2^12 samples with a border of 2^12, the largest grid TileGrid allows.
+    return max_tile_file_bytes({SampleType::Float32, 1, 16384, 12288, 4096});
+  }
+  // "L/index.rli": header, presence bitmap and a 16-byte record per tile.
+  const int level = std::atoi(relative.c_str());
+  if (level < 0 || level > 13) return kMaxLevelIndexBytes;
+  const uint64_t tiles = uint64_t{1} << (2 * level);
+  return std::min(kMaxLevelIndexBytes, 64 + tiles / 8 + 16 * tiles);
+}
+
+uint64_t FileCaps::cap(const std::string& relative) const {
+  std::lock_guard lock(mutex_);
+  return max_file_bytes(relative, shape_);
+}
+
+void FileCaps::learn(const std::string& relative, std::span<const std::byte> bytes) {
+  if (relative != kManifestName) return;
+  const std::string text(reinterpret_cast<const char*>(bytes.data()), bytes.size());
+  auto manifest = Manifest::from_json(text, relative);
+  if (!manifest) return;
+  auto shape = tile_shape_of(*manifest);
+  if (!shape) return;
+  std::lock_guard lock(mutex_);
+  shape_ = *shape;
 }
 
 Status StoreSource::verify(const std::string& relative, std::span<const std::byte> bytes) {

@@ -130,9 +130,35 @@ Result<TileHeader> parse_tile_header(std::span<const std::byte> bytes, const std
   return h;
 }
 
-Result<Tile> decode_tile(std::span<const std::byte> bytes, const std::string& name) {
+size_t TileShape::raster_bytes() const {
+  return static_cast<size_t>(width) * static_cast<size_t>(height) * static_cast<size_t>(bands) *
+         sample_size(type);
+}
+
+std::string TileShape::to_string() const {
+  return fmt::format("{}x{} (border {}) {} x{}", width, height, border, tiles::to_string(type),
+                     bands);
+}
+
+uint64_t max_tile_file_bytes(const TileShape& shape) {
+  return kTileHeaderSize + 2 * uint64_t{shape.raster_bytes()} + (uint64_t{1} << 20);
+}
+
+Status check_tile_shape(const TileHeader& h, const TileShape& expected, const std::string& name) {
+  const TileShape got{h.type, h.bands, h.width, h.height, h.border};
+  if (got.type != expected.type || got.bands != expected.bands || got.width != expected.width ||
+      got.height != expected.height || got.border != expected.border) {
+    return fail(fmt::format("{}: tile header says {}, the store's tiles are {}", name,
+                            got.to_string(), expected.to_string()));
+  }
+  return {};
+}
+
+Result<Tile> decode_tile(std::span<const std::byte> bytes, const std::string& name,
+                         const TileShape& expected) {
   auto header = parse_tile_header(bytes, name);
   if (!header) return std::unexpected(header.error());
+  RELIEF_CHECK(check_tile_shape(*header, expected, name));
   auto payload = bytes.subspan(kTileHeaderSize);
   if (crc32_of(payload) != header->payload_crc) {
     return fail(fmt::format("{}: tile payload checksum mismatch", name));

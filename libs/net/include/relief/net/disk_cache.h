@@ -4,7 +4,9 @@
 // byte budget, least recently used first out. Only verified files are
 // written (atomically), and every cached file is verified again when read,
 // so a damaged cache heals by fetching anew. Concurrent requests for one file
-// share one upstream fetch.
+// share one upstream fetch. Files are keyed by the store's identity (its
+// location and a hash of its manifest, fetched anew on every create), so
+// several stores share one directory and a changed store is never served stale.
 #include <filesystem>
 #include <memory>
 
@@ -19,11 +21,15 @@ struct DiskCacheStats {
 
 class DiskCache : public tiles::StoreSource {
  public:
-  // Files already under `directory` (from an earlier run) count from the start.
+  // Files already under `directory` (from an earlier run) count from the
+  // start. Fetches the manifest from the upstream; without an answer, the
+  // last one cached for that location (offline), else the upstream's error.
   static Result<std::shared_ptr<DiskCache>> create(
       std::shared_ptr<const tiles::StoreSource> upstream, const std::filesystem::path& directory,
       uint64_t budget_bytes);
   virtual DiskCacheStats stats() const = 0;
+  // Where this store's files are kept (under the cache directory).
+  virtual std::filesystem::path store_directory() const = 0;
 };
 
 }  // namespace relief::net

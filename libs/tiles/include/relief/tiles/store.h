@@ -25,6 +25,8 @@ class Store {
   const Manifest& manifest() const { return manifest_; }
   const geo::TileGrid& grid() const { return grid_; }
   const LevelIndex& index(int level) const;  // empty index outside the level range
+  // What every tile file of the store must hold (checked before decoding).
+  const TileShape& tile_shape() const { return shape_; }
 
   // The tile's file under root(): a path for local stores, a URL otherwise.
   std::filesystem::path tile_path(const geo::TileKey& key) const;
@@ -40,8 +42,12 @@ class Store {
   std::shared_ptr<const StoreSource> source_;
   Manifest manifest_;
   geo::TileGrid grid_;
+  TileShape shape_;
   std::vector<LevelIndex> indices_;
 };
+
+// The tile shape a manifest declares; an error if its grid is out of range.
+Result<TileShape> tile_shape_of(const Manifest& manifest);
 
 // The index record of a tile file with this header and size.
 IndexEntry index_entry_for(const geo::TileKey& key, const TileHeader& header, size_t file_bytes);

@@ -5,11 +5,14 @@
 #include <cstddef>
 #include <filesystem>
 #include <memory>
+#include <mutex>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
 
 #include "relief/base/result.h"
+#include "relief/tiles/tile_file.h"
 
 namespace relief::tiles {
 
@@ -26,7 +29,33 @@ class StoreSource {
   static Status verify(const std::string& relative, std::span<const std::byte> bytes);
 };
 
-// A store directory on the local file system.
+// The largest a store file of that name may be, so that sources can refuse a
+// larger one (a hostile server's endless body) before holding it: a manifest
+// kMaxManifestBytes; a level index the size it has with every tile of its
+// level present, at most kMaxLevelIndexBytes; a tile max_tile_file_bytes of
+// the store's tile shape, or before the manifest is known, of the largest
+// shape a manifest may declare.
+inline constexpr uint64_t kMaxManifestBytes = uint64_t{16} << 20;
+inline constexpr uint64_t kMaxLevelIndexBytes = uint64_t{256} << 20;
+uint64_t max_file_bytes(const std::string& relative, const std::optional<TileShape>& shape);
+
+// The caps of max_file_bytes for one store: sources learn the tile shape from
+// the manifest that passes through them (a Store fetches it first).
+// Thread-safe.
+class FileCaps {
+ public:
+  uint64_t cap(const std::string& relative) const;
+  // Learns from the bytes of `relative` if it is a valid manifest.
+  void learn(const std::string& relative, std::span<const std::byte> bytes);
+
+ private:
+  mutable std::mutex mutex_;
+  std::optional<TileShape> shape_;
+};
+
+// A store directory on the local file system. Only regular files are read,
+// and none larger than its cap (a sparse 20 GB tile file is an error, not a
+// 20 GB read).
 std::shared_ptr<const StoreSource> local_source(const std::filesystem::path& root);
 
 }  // namespace relief::tiles

@@ -47,14 +47,38 @@ struct Tile {
   Raster raster;  // width x height, border included
 };
 
+// The shape every tile of a store has (Store::tile_shape, from the manifest).
+// Tile files are untrusted input: a header is checked against the expected
+// shape before anything is allocated or decoded, so a forged size is an
+// error, not a 17 GB allocation.
+struct TileShape {
+  SampleType type = SampleType::Float32;
+  int bands = 1;
+  int width = 0, height = 0;  // border included
+  int border = 0;
+
+  size_t raster_bytes() const;
+  std::string to_string() const;  // "530x274 (border 9) float32 x1"
+};
+
+// The largest file a tile of this shape can be: the header plus the worst case
+// of every codec (twice the raw samples covers them all) plus slack. Remote
+// sources cap a tile's download by it.
+uint64_t max_tile_file_bytes(const TileShape& shape);
+
 // Encodes a bordered raster; statistics are computed over the interior.
 Result<std::vector<std::byte>> encode_tile(const Raster& bordered, int border,
                                            const CodecOptions& options);
 // Parses and checks the header alone (magic, version, header CRC, sizes).
 // `name` is used in error messages.
 Result<TileHeader> parse_tile_header(std::span<const std::byte> bytes, const std::string& name);
-// Parses the header, checks the payload CRC and decodes.
-Result<Tile> decode_tile(std::span<const std::byte> bytes, const std::string& name);
+// Whether the header describes a tile of the expected shape.
+Status check_tile_shape(const TileHeader& header, const TileShape& expected,
+                        const std::string& name);
+// Parses the header, checks it against `expected` (before allocating), checks
+// the payload CRC and decodes.
+Result<Tile> decode_tile(std::span<const std::byte> bytes, const std::string& name,
+                         const TileShape& expected);
 
 uint32_t crc32_of(std::span<const std::byte> bytes);
 
