@@ -37,13 +37,18 @@ constexpr const char* kStateName = "state.json";
 constexpr int kMaxSupportedLevel = 24;
 
 // --fill-voids: sources with voids are read from filled copies in the build
-// directory (recomputed on resume: cheap next to warping).
+// directory (recomputed on resume: cheap next to warping). The other sources
+// of a mosaic group that holds a filled one are copied too: the group must stay
+// one mosaic of files of one format, or GDAL would leave the unfilled ones out
+// (and splitting the group would change the samples along its seams).
 Result<uint64_t> fill_voids_of_sources(const BuildOptions& o, std::vector<Source>& sources,
-                                       Executor& executor) {
+                                       const std::vector<MosaicGroup>& groups, Executor& executor) {
+  auto copy_path = [&](size_t i) {
+    return o.output / kBuildDir / "filled" / fmt::format("{}.tif", i);
+  };
   std::vector<std::optional<Result<std::optional<FilledSource>>>> done(sources.size());
   executor.parallel_for(sources.size(), [&](size_t i) {
-    done[i] = fill_source_voids(sources[i].path,
-                                o.output / kBuildDir / "filled" / fmt::format("{}.tif", i));
+    done[i] = fill_source_voids(sources[i].path, copy_path(i));
   });
   uint64_t filled = 0;
   for (size_t i = 0; i < sources.size(); ++i) {
@@ -51,6 +56,22 @@ Result<uint64_t> fill_voids_of_sources(const BuildOptions& o, std::vector<Source
     if (!f) continue;
     sources[i].filled = f->path.string();
     filled += f->filled;
+  }
+  std::vector<size_t> plain;  // unfilled members of groups with a filled member
+  for (const MosaicGroup& g : groups) {
+    const bool any = std::any_of(g.members.begin(), g.members.end(),
+                                 [&](size_t m) { return !sources[m].filled.empty(); });
+    for (size_t m : g.members) {
+      if (any && sources[m].filled.empty()) plain.push_back(m);
+    }
+  }
+  std::vector<std::optional<Result<std::optional<FilledSource>>>> copied(plain.size());
+  executor.parallel_for(plain.size(), [&](size_t k) {
+    copied[k] = fill_source_voids(sources[plain[k]].path, copy_path(plain[k]), true);
+  });
+  for (size_t k = 0; k < plain.size(); ++k) {
+    const std::optional<FilledSource> f = RELIEF_TRY(std::move(*copied[k]));
+    sources[plain[k]].filled = f.value().path.string();
   }
   return filled;
 }
@@ -226,9 +247,9 @@ struct WrittenTile {
 
 class Builder {
  public:
-  Builder(const BuildOptions& o, std::vector<Source> sources, geo::TileGrid grid,
-          tiles::CodecOptions codec, int min_level, int max_level, MemoryPlan memory, Executor& ex,
-          Progress& progress)
+  Builder(const BuildOptions& o, std::vector<Source> sources, std::vector<MosaicGroup> groups,
+          geo::TileGrid grid, tiles::CodecOptions codec, int min_level, int max_level,
+          MemoryPlan memory, Executor& ex, Progress& progress)
       : o_(o),
         sources_(std::move(sources)),
         grid_(grid),
@@ -239,7 +260,7 @@ class Builder {
         progress_(progress),
         type_(o.kind == tiles::DatasetKind::Imagery ? tiles::SampleType::UInt8
                                                     : tiles::SampleType::Float32),
-        groups_(group_sources(sources_)),
+        groups_(std::move(groups)),
         cores_(o.output / kBuildDir / "cores", memory.core_cache) {}
 
   Result<BuildReport> run() {
@@ -534,12 +555,14 @@ Result<BuildReport> build_store(const BuildOptions& o, Executor& executor, Progr
   const std::string print = fingerprint(o, codec, min_level, max_level);
   if (RELIEF_TRY(prepare_output(o, print))) RELIEF_CHECK(remove_temporary_files(o.output));
   const auto start = std::chrono::steady_clock::now();
+  // Grouped before void filling, which must not change how sources mosaic.
+  std::vector<MosaicGroup> groups = group_sources(sources);
   const uint64_t filled =
-      o.fill_voids ? RELIEF_TRY(fill_voids_of_sources(o, sources, executor)) : 0;
+      o.fill_voids ? RELIEF_TRY(fill_voids_of_sources(o, sources, groups, executor)) : 0;
   const double fill_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  Builder builder(o, std::move(sources), *grid, codec, min_level, max_level, memory, executor,
-                  progress);
+  Builder builder(o, std::move(sources), std::move(groups), *grid, codec, min_level, max_level,
+                  memory, executor, progress);
   BuildReport report = RELIEF_TRY(builder.run());
   report.voids_filled = filled;
   if (o.fill_voids) {
