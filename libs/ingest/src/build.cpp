@@ -17,6 +17,7 @@
 
 #include "core_store.h"
 #include "gdal_env.h"
+#include "output_guard.h"
 #include "pyramid.h"
 #include "relief/base/file_io.h"
 #include "relief/base/first_error.h"
@@ -32,8 +33,6 @@ using geo::TileKey;
 
 namespace {
 
-constexpr const char* kBuildDir = ".build";
-constexpr const char* kStateName = "state.json";
 constexpr int kMaxSupportedLevel = 24;
 
 // --fill-voids: sources with voids are read from filled copies in the build
@@ -74,6 +73,16 @@ Result<uint64_t> fill_voids_of_sources(const BuildOptions& o, std::vector<Source
     sources[plain[k]].filled = f.value().path.string();
   }
   return filled;
+}
+
+// Infinite samples are nodata: no statistic, LOD error or colour ramp can use
+// them. A store sample whose bilinear support touches one (inf, or inf - inf =
+// NaN) is nodata too.
+void drop_non_finite(tiles::Raster& core) {
+  if (core.type() != tiles::SampleType::Float32) return;
+  for (float& v : core.f32()) {
+    if (!std::isfinite(v)) v = std::numeric_limits<float>::quiet_NaN();
+  }
 }
 
 // Everything that determines the output. A resumed build must match it exactly.
@@ -130,10 +139,18 @@ bool is_store_like(const fs::path& dir) {
   return fs::exists(dir / tiles::kManifestName, ec) || fs::exists(dir / kBuildDir / kStateName, ec);
 }
 
-// Decides whether to start fresh, resume, or refuse. Returns true when resuming.
-Result<bool> prepare_output(const BuildOptions& o, const std::string& print) {
+// What to do with the output directory.
+enum class OutputState {
+  Fresh,     // nothing there (or replaced with --overwrite): build from scratch
+  Resume,    // an interrupted build with the same parameters
+  Finished,  // complete, but the build was stopped before removing .build/
+};
+
+// Decides whether to start fresh, resume, finish, or refuse.
+Result<OutputState> prepare_output(const BuildOptions& o, const std::string& print) {
   std::error_code ec;
   const fs::path& out = o.output;
+  RELIEF_CHECK(check_output_apart_from_inputs(out, o.inputs));
   if (fs::exists(out, ec) && !fs::is_directory(out, ec)) {
     return fail(fmt::format("{}: exists and is not a directory", out.string()));
   }
@@ -146,18 +163,29 @@ Result<bool> prepare_output(const BuildOptions& o, const std::string& print) {
   if (exists && is_store_like(out)) {
     const fs::path state = out / kBuildDir / kStateName;
     const bool complete = fs::exists(out / tiles::kManifestName, ec);
+    const auto text = read_text_file(state);
+    const bool same = text && *text == print;
     if (!o.overwrite) {
+      // The manifest is written last, after every tile and index is durable:
+      // a store with one is complete even if .build/ is still there.
+      if (complete && fs::exists(out / kBuildDir, ec)) {
+        if (same) return OutputState::Finished;
+        return fail(
+            fmt::format("{}: store already exists, with the scratch of an interrupted build "
+                        "(run the same command again to finish it, or pass --overwrite)",
+                        out.string()));
+      }
       if (complete) {
         return fail(
             fmt::format("{}: store already exists (pass --overwrite to rebuild it)", out.string()));
       }
-      auto text = read_text_file(state);
-      if (text && *text == print) return true;  // an interrupted build with the same parameters
+      if (same) return OutputState::Resume;
       return fail(
           fmt::format("{}: holds an interrupted build with other parameters "
                       "(pass --overwrite to start again)",
                       out.string()));
     }
+    RELIEF_CHECK(check_only_store_files(out));
     fs::remove_all(out, ec);
     if (ec)
       return fail(fmt::format("{}: cannot remove the old store: {}", out.string(), ec.message()));
@@ -165,7 +193,23 @@ Result<bool> prepare_output(const BuildOptions& o, const std::string& print) {
   fs::create_directories(out / kBuildDir, ec);
   if (ec) return fail(fmt::format("{}: cannot create: {}", out.string(), ec.message()));
   RELIEF_CHECK(write_text_file_atomic(out / kBuildDir / kStateName, print));
-  return false;
+  return OutputState::Fresh;
+}
+
+// Finishes a build stopped between its manifest and the removal of .build/.
+Result<BuildReport> finish_cleanup(const fs::path& out) {
+  const tiles::Store store = RELIEF_TRY(tiles::Store::open(out));
+  RELIEF_CHECK(remove_temporary_files(out));
+  std::error_code ec;
+  fs::remove_all(out / kBuildDir, ec);
+  if (ec)
+    return fail(fmt::format("{}: cannot remove: {}", (out / kBuildDir).string(), ec.message()));
+  BuildReport report;
+  report.manifest = store.manifest();
+  for (int l = report.manifest.min_level; l <= report.manifest.max_level; ++l) {
+    report.tiles_resumed += store.index(l).size();
+  }
+  return report;
 }
 
 tiles::CodecOptions choose_codec(const BuildOptions& o) {
@@ -365,6 +409,7 @@ class Builder {
                                                 o_.direct_resampling);
         }
         auto core = warper->warp(keys[i]);
+        if (core) drop_non_finite(*core);
         if (!core)
           error.set(core.error());
         else if (core->any_valid()) {
@@ -553,7 +598,9 @@ Result<BuildReport> build_store(const BuildOptions& o, Executor& executor, Progr
     return fail(fmt::format("--min-level: {} is not in 0..{}", min_level, max_level));
   }
   const std::string print = fingerprint(o, codec, min_level, max_level);
-  if (RELIEF_TRY(prepare_output(o, print))) RELIEF_CHECK(remove_temporary_files(o.output));
+  const OutputState state = RELIEF_TRY(prepare_output(o, print));
+  if (state == OutputState::Finished) return finish_cleanup(o.output);
+  if (state == OutputState::Resume) RELIEF_CHECK(remove_temporary_files(o.output));
   const auto start = std::chrono::steady_clock::now();
   // Grouped before void filling, which must not change how sources mosaic.
   std::vector<MosaicGroup> groups = group_sources(sources);

@@ -140,6 +140,9 @@ Result<std::optional<FilledSource>> fill_source_voids(const std::string& path,
   GDALRasterBandH band = GDALGetRasterBand(src.get(), 1);
   std::vector<float> values;
   if (auto err = read_padded(band, 0, 0, w, h, 0, values, path)) return fail(*err);
+  for (float& v : values) {  // infinite samples are nodata (see build.cpp)
+    if (!std::isfinite(v)) v = std::numeric_limits<float>::quiet_NaN();
+  }
   const uint64_t filled = fill_voids(values, w, h);
   if (filled == 0 && !always_copy) return std::optional<FilledSource>{};
 

@@ -80,8 +80,14 @@ Result<FuseReport> fuse_stores(const FuseOptions& o, Executor& executor, Progres
         fmt::format("--weights: {} weights for {} inputs", weights.size(), o.inputs.size()));
   }
   for (double w : weights) {
-    if (!(w > 0) || !std::isfinite(w)) return fail(fmt::format("--weights: {} is not > 0", w));
+    if (!(w > 0) || !std::isfinite(w)) {
+      return fail(fmt::format("--weights: {} is not > 0 and finite", w));
+    }
   }
+  // Only the ratios matter: scaled to at most 1, weighted sums of float
+  // samples cannot overflow (1e308 + 1e308 would be inf, and inf / inf NaN).
+  const double largest = *std::max_element(weights.begin(), weights.end());
+  for (double& w : weights) w /= largest;
   std::vector<tiles::Store> stores;
   for (const auto& path : o.inputs) {
     stores.push_back(RELIEF_TRY(tiles::Store::open(path)));
