@@ -16,6 +16,7 @@
 #include <nlohmann/json.hpp>
 
 #include "relief/base/file_io.h"
+#include "relief/tiles/store.h"
 #include "test_support.h"
 
 namespace relief::testing {
@@ -163,6 +164,35 @@ TEST(FuseWeights, HugeWeightsDoNotOverflow) {
   const auto huge = nlohmann::json::parse(contents(dir / "huge" / "manifest.json"));
   EXPECT_EQ(unit.at("statistics"), huge.at("statistics"));
   expect_one_line_error(fuse("bad", "1,inf"), "--weights");
+}
+
+// An input built to a coarser finest level than the others is upsampled into
+// the finer levels, not left out of them (and out of the statistics).
+TEST(FuseLevels, AnInputBuiltCoarserStillFillsTheFinerLevels) {
+  ScratchDir dir("fuse_levels");
+  ASSERT_EQ(run_relief(build(kWest, dir / "fine")).exit_code, 0);  // levels 0..5
+  auto coarse = build(kEast, dir / "coarse");
+  coarse[7] = "3";  // --max-level
+  ASSERT_EQ(run_relief(coarse).exit_code, 0);
+  auto both = build(kWest, dir / "both");
+  both.insert(both.begin() + 2, kEast);
+  ASSERT_EQ(run_relief(both).exit_code, 0);
+  auto r = run_relief({"fuse", (dir / "fine").string(), (dir / "coarse").string(), "-o",
+                       (dir / "fused").string(), "-q"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(run_relief({"verify", (dir / "fused").string(), "-q"}).exit_code, 0);
+  auto fused = tiles::Store::open(dir / "fused");
+  auto expected = tiles::Store::open(dir / "both");
+  ASSERT_TRUE(fused && expected);
+  for (int level = 4; level <= 5; ++level) {
+    EXPECT_EQ(fused->index(level).size(), expected->index(level).size()) << level;
+  }
+  // Upsampled 4 x, the coarse input's edge moves by up to a coarse sample.
+  EXPECT_NEAR(static_cast<double>(fused->manifest().stats.valid_count),
+              static_cast<double>(expected->manifest().stats.valid_count),
+              0.05 * static_cast<double>(expected->manifest().stats.valid_count));
+  EXPECT_NEAR(fused->manifest().stats.mean, expected->manifest().stats.mean,
+              0.02 * expected->manifest().stats.mean);
 }
 
 TEST(BuildMemory, BudgetsBeyondTheMachineAreRefused) {
