@@ -205,7 +205,7 @@ TEST(BuildMemory, BudgetsBeyondTheMachineAreRefused) {
   }
 }
 
-TEST(StaleTemporaries, AKilledFuseLeavesNothingForTheNextRun) {
+TEST(StaleTemporaries, AKilledFuseOrExportLeavesNothingForTheNextRun) {
   ScratchDir dir("stale_fuse");
   ASSERT_EQ(run_relief(build(kWest, dir / "a")).exit_code, 0);
   ASSERT_EQ(run_relief(build(kEast, dir / "b")).exit_code, 0);
@@ -219,6 +219,13 @@ TEST(StaleTemporaries, AKilledFuseLeavesNothingForTheNextRun) {
       {"fuse", (dir / "a").string(), (dir / "b").string(), "-o", (dir / "f").string(), "-q"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_FALSE(fs::exists(stale));
+  // A killed export's temporary GeoTIFF, likewise.
+  const fs::path stale_tif = dir / fmt::format("e.tif{}{}", kTempMarker, child);
+  std::ofstream(stale_tif) << "partial";
+  r = run_relief({"export", (dir / "a").string(), "--level", "3", "-o", (dir / "e.tif").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_FALSE(fs::exists(stale_tif));
+  EXPECT_TRUE(fs::exists(dir / "e.tif"));
 }
 
 }  // namespace
