@@ -144,6 +144,10 @@ struct InputSet {
   bool has_voids;  // some input has a void
 };
 
+void PrintTo(const InputSet& set, std::ostream* os) {
+  *os << set.name;
+}
+
 class FillVoidsInputs : public ::testing::TestWithParam<InputSet> {};
 
 TEST_P(FillVoidsInputs, EveryInputKeptAndValuesChangeOnlyAtVoids) {
