@@ -4,6 +4,7 @@
 
 #include "args.h"
 #include "commands.h"
+#include "relief/base/memory_use.h"
 #include "relief/base/units.h"
 #include "relief/ingest/build.h"
 
@@ -118,6 +119,12 @@ int run_build(const std::vector<std::string>& argv) {
   if (auto m = args->get("--memory")) {
     auto bytes = parse_byte_size(*m);
     if (!bytes) return report_error("--memory: " + bytes.error().message);
+    // A budget the machine cannot give would only move the failure to an
+    // out-of-memory kill hours into the build.
+    if (const uint64_t physical = physical_memory_bytes(); physical && *bytes > physical) {
+      return report_error(fmt::format("--memory: {} is more than this machine's memory ({})", *m,
+                                      format_bytes(physical)));
+    }
     o.memory_budget = *bytes;
   }
   auto threads = args->get_int("--threads", 1, 1024);

@@ -2,8 +2,15 @@
 
 #include <gtest/gtest.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <filesystem>
+#include <fstream>
+
+#include <fmt/format.h>
+
+#include "relief/base/units.h"
 
 namespace relief {
 namespace fs = std::filesystem;
@@ -69,6 +76,49 @@ TEST(FileIo, AtomicWriteRefusesToReplaceNonRegularFiles) {
   EXPECT_EQ(*read_text_file(dir / "real.txt"), "real");
   EXPECT_EQ(*read_text_file(dir / "real_link"), "new");
   fs::remove_all(dir);
+}
+
+// A process id that was just in use and now is not.
+pid_t dead_pid() {
+  const pid_t child = ::fork();
+  if (child == 0) ::_exit(0);
+  int status = 0;
+  ::waitpid(child, &status, 0);
+  return child;
+}
+
+TEST(FileIo, StaleTemporariesOfDeadProcessesAreRemovedOthersKept) {
+  const fs::path dir = fs::temp_directory_path() / "relief_file_io_stale";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const pid_t dead = dead_pid();
+  const fs::path out = dir / "out";
+  const fs::path stale_dir = dir / fmt::format("out.tmp.{}", dead);
+  const fs::path stale_file = dir / fmt::format("out.tmp.{}.3", dead);
+  const fs::path mine = temporary_name(out);   // this process: alive
+  const fs::path other = dir / "other.tmp.1";  // another output's
+  const fs::path no_pid = dir / "out.tmp.x";   // not one of ours
+  fs::create_directories(stale_dir / "3");
+  std::ofstream(stale_dir / "3" / "a.rtile") << "x";
+  for (const auto& p : {stale_file, mine, other, no_pid}) std::ofstream(p) << "x";
+  EXPECT_TRUE(is_stale_temporary_file(stale_dir));
+  EXPECT_FALSE(is_stale_temporary_file(mine));
+  auto removed = remove_stale_temporaries_of(out);
+  ASSERT_TRUE(removed) << removed.error().message;
+  EXPECT_EQ(*removed, 2u);
+  EXPECT_FALSE(fs::exists(stale_dir));
+  EXPECT_FALSE(fs::exists(stale_file));
+  for (const auto& p : {mine, other, no_pid}) EXPECT_TRUE(fs::exists(p)) << p;
+  fs::remove_all(dir);
+}
+
+TEST(Units, SizesBeyondWhatFitsAreRefused) {
+  EXPECT_EQ(*parse_byte_size("2GiB"), uint64_t{2} << 30);
+  EXPECT_EQ(*parse_byte_size("15TiB"), uint64_t{15} << 40);
+  for (const char* text : {"99999999TiB", "1e30", "inf", "nan", "-1"}) {
+    auto r = parse_byte_size(text);
+    EXPECT_FALSE(r) << text << " gave " << (r ? *r : 0);
+  }
 }
 
 }  // namespace relief

@@ -111,6 +111,45 @@ TEST(Resume, KilledBuildsResumeToTheSameStore) {
   }
 }
 
+// Killed after the manifest's rename but before .build/ is removed (the last
+// two steps cannot be one atomic step): the store is complete, and the re-run
+// finishes the cleanup instead of refusing the store as existing.
+TEST(Resume, KilledAfterTheManifestIsFinishedByTheRerun) {
+  ScratchDir dir("resume_after_manifest");
+  const fs::path clean = dir / "clean";
+  ASSERT_EQ(run_relief(build_args(clean.string())).exit_code, 0);
+  const auto expected = store_files(clean);
+
+  // The scratch of this build as it stands before its cleanup: taken from a
+  // build killed while writing tiles, which has all of it.
+  const fs::path out = dir / "killed";
+  const int pid = spawn_relief(build_args(out.string()));
+  ASSERT_GT(pid, 0);
+  ASSERT_TRUE(kill_when(pid, [&] { return count_files(out / "11") >= 5; }));
+  const fs::path saved = dir / "saved_build";
+  fs::copy(out / ".build", saved, fs::copy_options::recursive);
+  ASSERT_EQ(run_relief(build_args(out.string())).exit_code, 0);
+  ASSERT_FALSE(fs::exists(out / ".build"));
+  fs::copy(saved, out / ".build", fs::copy_options::recursive);  // the kill point
+  std::ofstream(out / "11" / ("000.rtile" + std::string(kTempMarker) + "1.0")) << "partial";
+  EXPECT_NE(run_relief({"verify", out.string(), "-q"}).exit_code, 0);
+
+  auto rerun = run_relief(build_args(out.string()));
+  ASSERT_EQ(rerun.exit_code, 0) << rerun.err;
+  EXPECT_FALSE(fs::exists(out / ".build"));
+  auto verify = run_relief({"verify", out.string(), "-q"});
+  EXPECT_EQ(verify.exit_code, 0) << verify.out << verify.err;
+  const auto got = store_files(out);
+  ASSERT_EQ(got.size(), expected.size());
+  for (const auto& [name, bytes] : expected) {
+    auto it = got.find(name);
+    ASSERT_NE(it, got.end()) << name;
+    EXPECT_TRUE(it->second == bytes) << name;
+  }
+  // Once complete and clean, the same command says the store exists.
+  EXPECT_NE(run_relief(build_args(out.string())).exit_code, 0);
+}
+
 TEST(Resume, InterruptedBuildWithOtherParametersIsRefused) {
   ScratchDir dir("resume_params");
   const fs::path out = dir / "s";

@@ -2,6 +2,12 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <filesystem>
+
+#include "relief/tiles/store.h"
+#include "relief/tiles/store_layout.h"
+
 namespace relief::tiles {
 
 TEST(Manifest, JsonRoundTrip) {
@@ -32,6 +38,35 @@ TEST(Manifest, BadManifestsNameTheFile) {
     ASSERT_FALSE(m) << text;
     EXPECT_NE(m.error().message.find("store/manifest.json"), std::string::npos);
   }
+}
+
+// JSON has no infinity: written, it would read back as null and the store
+// would open nowhere. The writer refuses, naming the field, and writes nothing.
+TEST(Manifest, NonFiniteValuesAreNeverWritten) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / "relief_manifest_non_finite";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  Manifest m;
+  m.stats = {0, 100, 50, 10, 1000};
+  ASSERT_TRUE(write_manifest(dir, m));
+  fs::remove(dir / kManifestName);
+  for (double bad : {INFINITY, -INFINITY, NAN}) {
+    Manifest b = m;
+    b.stats.min = bad;
+    auto st = write_manifest(dir, b);
+    ASSERT_FALSE(st);
+    EXPECT_NE(st.error().message.find("statistics min"), std::string::npos) << st.error().message;
+    b = m;
+    b.stats.mean = bad;
+    EXPECT_FALSE(write_manifest(dir, b));
+    b = m;
+    b.extent.east = bad;
+    EXPECT_FALSE(write_manifest(dir, b));
+    EXPECT_FALSE(fs::exists(dir / kManifestName));
+  }
+  EXPECT_TRUE(fs::is_empty(dir));  // no temporary left either
+  fs::remove_all(dir);
 }
 
 }  // namespace relief::tiles

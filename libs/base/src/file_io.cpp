@@ -2,9 +2,11 @@
 
 #include <fcntl.h>
 #include <sys/stat.h>
+#include <signal.h>
 #include <unistd.h>
 
 #include <fmt/format.h>
+#include <algorithm>
 #include <atomic>
 #include <cerrno>
 #include <cstring>
@@ -67,12 +69,46 @@ Status check_replaceable(const fs::path& path) {
                           file_type_name(st.st_mode)));
 }
 
-namespace {
-
-std::string temp_name(const fs::path& path) {
+std::string temporary_name(const fs::path& path) {
   static std::atomic<unsigned> counter{0};
   return fmt::format("{}{}{}.{}", path.string(), kTempMarker, ::getpid(), counter.fetch_add(1));
 }
+
+bool is_stale_temporary_file(const fs::path& path) {
+  const std::string name = path.filename().string();
+  const size_t marker = name.rfind(kTempMarker);
+  if (marker == std::string::npos) return false;
+  const size_t start = marker + kTempMarker.size();
+  const size_t end = std::min(name.find_first_not_of("0123456789", start), name.size());
+  if (end == start || end - start > 9 || (end != name.size() && name[end] != '.')) {
+    return false;  // no process id: not one of ours
+  }
+  const auto pid = static_cast<pid_t>(std::stol(name.substr(start, end - start)));
+  if (pid <= 0 || pid == ::getpid()) return false;
+  // EPERM: alive under another user. A reused id keeps a file; never a live one lost.
+  return ::kill(pid, 0) != 0 && errno == ESRCH;
+}
+
+Result<uint64_t> remove_stale_temporaries_of(const fs::path& final_path) {
+  const fs::path parent = final_path.has_parent_path() ? final_path.parent_path() : ".";
+  const std::string prefix = final_path.filename().string() + std::string(kTempMarker);
+  std::error_code ec;
+  std::vector<fs::path> stale;
+  for (auto it = fs::directory_iterator(parent, ec); !ec && it != fs::directory_iterator();
+       it.increment(ec)) {
+    const fs::path& p = it->path();
+    if (p.filename().string().starts_with(prefix) && is_stale_temporary_file(p)) {
+      stale.push_back(p);
+    }
+  }
+  for (const auto& p : stale) {
+    fs::remove_all(p, ec);
+    if (ec) return fail(fmt::format("{}: cannot remove: {}", p.string(), ec.message()));
+  }
+  return stale.size();
+}
+
+namespace {
 
 Status write_all(int fd, std::span<const std::byte> bytes, const std::string& name) {
   size_t done = 0;
@@ -99,7 +135,7 @@ Status write_file_atomic(const fs::path& path, std::span<const std::byte> bytes,
                               ec.message()));
     }
   }
-  const std::string tmp = temp_name(path);
+  const std::string tmp = temporary_name(path);
   int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
   if (fd < 0) return fail(fmt::format("{}: cannot create: {}", path.string(), errno_text(errno)));
   auto status = write_all(fd, bytes, path.string());

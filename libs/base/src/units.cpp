@@ -25,7 +25,10 @@ Result<uint64_t> parse_byte_size(std::string_view text) {
   else
     return fail(
         fmt::format("'{}' has an unknown unit '{}' (use B, KiB, MiB, GiB, TiB)", text, unit));
-  return static_cast<uint64_t>(std::llround(value * scale));
+  const double bytes = std::round(value * scale);
+  // 2^64 bytes: far beyond any machine, and beyond what uint64_t holds.
+  if (!(bytes < 18446744073709551616.0)) return fail(fmt::format("'{}' is too large", text));
+  return static_cast<uint64_t>(bytes);
 }
 
 std::string format_bytes(uint64_t bytes) {

@@ -17,6 +17,7 @@
 
 #include "core_store.h"
 #include "gdal_env.h"
+#include "output_guard.h"
 #include "pyramid.h"
 #include "relief/base/file_io.h"
 #include "relief/base/first_error.h"
@@ -32,18 +33,21 @@ using geo::TileKey;
 
 namespace {
 
-constexpr const char* kBuildDir = ".build";
-constexpr const char* kStateName = "state.json";
 constexpr int kMaxSupportedLevel = 24;
 
 // --fill-voids: sources with voids are read from filled copies in the build
-// directory (recomputed on resume: cheap next to warping).
+// directory (recomputed on resume: cheap next to warping). The other sources
+// of a mosaic group that holds a filled one are copied too: the group must stay
+// one mosaic of files of one format, or GDAL would leave the unfilled ones out
+// (and splitting the group would change the samples along its seams).
 Result<uint64_t> fill_voids_of_sources(const BuildOptions& o, std::vector<Source>& sources,
-                                       Executor& executor) {
+                                       const std::vector<MosaicGroup>& groups, Executor& executor) {
+  auto copy_path = [&](size_t i) {
+    return o.output / kBuildDir / "filled" / fmt::format("{}.tif", i);
+  };
   std::vector<std::optional<Result<std::optional<FilledSource>>>> done(sources.size());
   executor.parallel_for(sources.size(), [&](size_t i) {
-    done[i] = fill_source_voids(sources[i].path,
-                                o.output / kBuildDir / "filled" / fmt::format("{}.tif", i));
+    done[i] = fill_source_voids(sources[i].path, copy_path(i));
   });
   uint64_t filled = 0;
   for (size_t i = 0; i < sources.size(); ++i) {
@@ -52,7 +56,33 @@ Result<uint64_t> fill_voids_of_sources(const BuildOptions& o, std::vector<Source
     sources[i].filled = f->path.string();
     filled += f->filled;
   }
+  std::vector<size_t> plain;  // unfilled members of groups with a filled member
+  for (const MosaicGroup& g : groups) {
+    const bool any = std::any_of(g.members.begin(), g.members.end(),
+                                 [&](size_t m) { return !sources[m].filled.empty(); });
+    for (size_t m : g.members) {
+      if (any && sources[m].filled.empty()) plain.push_back(m);
+    }
+  }
+  std::vector<std::optional<Result<std::optional<FilledSource>>>> copied(plain.size());
+  executor.parallel_for(plain.size(), [&](size_t k) {
+    copied[k] = fill_source_voids(sources[plain[k]].path, copy_path(plain[k]), true);
+  });
+  for (size_t k = 0; k < plain.size(); ++k) {
+    const std::optional<FilledSource> f = RELIEF_TRY(std::move(*copied[k]));
+    sources[plain[k]].filled = f.value().path.string();
+  }
   return filled;
+}
+
+// Infinite samples are nodata: no statistic, LOD error or colour ramp can use
+// them. A store sample whose bilinear support touches one (inf, or inf - inf =
+// NaN) is nodata too.
+void drop_non_finite(tiles::Raster& core) {
+  if (core.type() != tiles::SampleType::Float32) return;
+  for (float& v : core.f32()) {
+    if (!std::isfinite(v)) v = std::numeric_limits<float>::quiet_NaN();
+  }
 }
 
 // Everything that determines the output. A resumed build must match it exactly.
@@ -109,10 +139,18 @@ bool is_store_like(const fs::path& dir) {
   return fs::exists(dir / tiles::kManifestName, ec) || fs::exists(dir / kBuildDir / kStateName, ec);
 }
 
-// Decides whether to start fresh, resume, or refuse. Returns true when resuming.
-Result<bool> prepare_output(const BuildOptions& o, const std::string& print) {
+// What to do with the output directory.
+enum class OutputState {
+  Fresh,     // nothing there (or replaced with --overwrite): build from scratch
+  Resume,    // an interrupted build with the same parameters
+  Finished,  // complete, but the build was stopped before removing .build/
+};
+
+// Decides whether to start fresh, resume, finish, or refuse.
+Result<OutputState> prepare_output(const BuildOptions& o, const std::string& print) {
   std::error_code ec;
   const fs::path& out = o.output;
+  RELIEF_CHECK(check_output_apart_from_inputs(out, o.inputs));
   if (fs::exists(out, ec) && !fs::is_directory(out, ec)) {
     return fail(fmt::format("{}: exists and is not a directory", out.string()));
   }
@@ -125,18 +163,29 @@ Result<bool> prepare_output(const BuildOptions& o, const std::string& print) {
   if (exists && is_store_like(out)) {
     const fs::path state = out / kBuildDir / kStateName;
     const bool complete = fs::exists(out / tiles::kManifestName, ec);
+    const auto text = read_text_file(state);
+    const bool same = text && *text == print;
     if (!o.overwrite) {
+      // The manifest is written last, after every tile and index is durable:
+      // a store with one is complete even if .build/ is still there.
+      if (complete && fs::exists(out / kBuildDir, ec)) {
+        if (same) return OutputState::Finished;
+        return fail(
+            fmt::format("{}: store already exists, with the scratch of an interrupted build "
+                        "(run the same command again to finish it, or pass --overwrite)",
+                        out.string()));
+      }
       if (complete) {
         return fail(
             fmt::format("{}: store already exists (pass --overwrite to rebuild it)", out.string()));
       }
-      auto text = read_text_file(state);
-      if (text && *text == print) return true;  // an interrupted build with the same parameters
+      if (same) return OutputState::Resume;
       return fail(
           fmt::format("{}: holds an interrupted build with other parameters "
                       "(pass --overwrite to start again)",
                       out.string()));
     }
+    RELIEF_CHECK(check_only_store_files(out));
     fs::remove_all(out, ec);
     if (ec)
       return fail(fmt::format("{}: cannot remove the old store: {}", out.string(), ec.message()));
@@ -144,7 +193,23 @@ Result<bool> prepare_output(const BuildOptions& o, const std::string& print) {
   fs::create_directories(out / kBuildDir, ec);
   if (ec) return fail(fmt::format("{}: cannot create: {}", out.string(), ec.message()));
   RELIEF_CHECK(write_text_file_atomic(out / kBuildDir / kStateName, print));
-  return false;
+  return OutputState::Fresh;
+}
+
+// Finishes a build stopped between its manifest and the removal of .build/.
+Result<BuildReport> finish_cleanup(const fs::path& out) {
+  const tiles::Store store = RELIEF_TRY(tiles::Store::open(out));
+  RELIEF_CHECK(remove_temporary_files(out));
+  std::error_code ec;
+  fs::remove_all(out / kBuildDir, ec);
+  if (ec)
+    return fail(fmt::format("{}: cannot remove: {}", (out / kBuildDir).string(), ec.message()));
+  BuildReport report;
+  report.manifest = store.manifest();
+  for (int l = report.manifest.min_level; l <= report.manifest.max_level; ++l) {
+    report.tiles_resumed += store.index(l).size();
+  }
+  return report;
 }
 
 tiles::CodecOptions choose_codec(const BuildOptions& o) {
@@ -226,9 +291,9 @@ struct WrittenTile {
 
 class Builder {
  public:
-  Builder(const BuildOptions& o, std::vector<Source> sources, geo::TileGrid grid,
-          tiles::CodecOptions codec, int min_level, int max_level, MemoryPlan memory, Executor& ex,
-          Progress& progress)
+  Builder(const BuildOptions& o, std::vector<Source> sources, std::vector<MosaicGroup> groups,
+          geo::TileGrid grid, tiles::CodecOptions codec, int min_level, int max_level,
+          MemoryPlan memory, Executor& ex, Progress& progress)
       : o_(o),
         sources_(std::move(sources)),
         grid_(grid),
@@ -239,7 +304,7 @@ class Builder {
         progress_(progress),
         type_(o.kind == tiles::DatasetKind::Imagery ? tiles::SampleType::UInt8
                                                     : tiles::SampleType::Float32),
-        groups_(group_sources(sources_)),
+        groups_(std::move(groups)),
         cores_(o.output / kBuildDir / "cores",
                {type_, type_ == tiles::SampleType::UInt8 ? 4 : 1, grid.width(), grid.height(), 0},
                memory.core_cache) {}
@@ -346,6 +411,7 @@ class Builder {
                                                 o_.direct_resampling);
         }
         auto core = warper->warp(keys[i]);
+        if (core) drop_non_finite(*core);
         if (!core)
           error.set(core.error());
         else if (core->any_valid()) {
@@ -534,14 +600,18 @@ Result<BuildReport> build_store(const BuildOptions& o, Executor& executor, Progr
     return fail(fmt::format("--min-level: {} is not in 0..{}", min_level, max_level));
   }
   const std::string print = fingerprint(o, codec, min_level, max_level);
-  if (RELIEF_TRY(prepare_output(o, print))) RELIEF_CHECK(remove_temporary_files(o.output));
+  const OutputState state = RELIEF_TRY(prepare_output(o, print));
+  if (state == OutputState::Finished) return finish_cleanup(o.output);
+  if (state == OutputState::Resume) RELIEF_CHECK(remove_temporary_files(o.output));
   const auto start = std::chrono::steady_clock::now();
+  // Grouped before void filling, which must not change how sources mosaic.
+  std::vector<MosaicGroup> groups = group_sources(sources);
   const uint64_t filled =
-      o.fill_voids ? RELIEF_TRY(fill_voids_of_sources(o, sources, executor)) : 0;
+      o.fill_voids ? RELIEF_TRY(fill_voids_of_sources(o, sources, groups, executor)) : 0;
   const double fill_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  Builder builder(o, std::move(sources), *grid, codec, min_level, max_level, memory, executor,
-                  progress);
+  Builder builder(o, std::move(sources), std::move(groups), *grid, codec, min_level, max_level,
+                  memory, executor, progress);
   BuildReport report = RELIEF_TRY(builder.run());
   report.voids_filled = filled;
   if (o.fill_voids) {

@@ -52,6 +52,7 @@ Result<ExportReport> export_geotiff(const ExportOptions& o, Progress& progress) 
   init_gdal();
   const bool imagery = m.sample_type == tiles::SampleType::UInt8;
   const int bands = imagery ? 4 : 1;
+  static_cast<void>(remove_stale_temporaries_of(o.output));  // of killed runs
   const std::string tmp = o.output.string() + std::string(kTempMarker) + std::to_string(::getpid());
   const char* create_options[] = {"TILED=YES",
                                   "COMPRESS=DEFLATE",

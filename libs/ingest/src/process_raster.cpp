@@ -56,6 +56,7 @@ Result<ProcessRasterReport> process_raster(const ProcessRasterOptions& o, Execut
   const int strip =
       static_cast<int>(std::clamp<uint64_t>(o.memory_budget / 2 / row_bytes, 16, 256));
 
+  static_cast<void>(remove_stale_temporaries_of(o.output));  // of killed runs
   const std::string tmp = o.output.string() + std::string(kTempMarker) + std::to_string(::getpid());
   if (o.compress != "none" && o.compress != "deflate" && o.compress != "zstd") {
     return fail(fmt::format("--compress: '{}' is not none, deflate or zstd", o.compress));

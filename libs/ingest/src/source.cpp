@@ -25,6 +25,17 @@ std::string authority_name(OGRSpatialReferenceH srs, const std::string& wkt) {
   return wkt;
 }
 
+std::string mosaic_key_of(GDALDatasetH ds) {
+  std::string key;
+  for (int b = 1; b <= GDALGetRasterCount(ds); ++b) {
+    GDALRasterBandH band = GDALGetRasterBand(ds, b);
+    key += fmt::format("{}:{}:{};", GDALGetDataTypeName(GDALGetRasterDataType(band)),
+                       static_cast<int>(GDALGetRasterColorInterpretation(band)),
+                       GDALGetRasterColorTable(band) != nullptr);
+  }
+  return key;
+}
+
 struct SrsDeleter {
   void operator()(OGRSpatialReferenceH h) const { OSRDestroySpatialReference(h); }
 };
@@ -45,6 +56,7 @@ Result<Source> describe_source(const std::string& path, tiles::DatasetKind kind,
   }
   const GDALDataType type = GDALGetRasterDataType(GDALGetRasterBand(ds.get(), 1));
   s.data_type = GDALGetDataTypeName(type);
+  s.mosaic_key = mosaic_key_of(ds.get());
   if (is_complex(type)) {
     return fail(
         fmt::format("{}: unsupported data type {} (complex samples; convert to amplitude first)",

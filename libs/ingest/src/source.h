@@ -19,6 +19,10 @@ struct Source {
   int colour_bands = 0;  // bands carried into the store (alpha excluded)
   bool has_alpha = false;
   std::string data_type;
+  // What GDAL's VRT builder requires to be equal between mosaicked files
+  // (data type, colour interpretation and table per band); it skips a file
+  // that differs, so only sources with equal keys share a mosaic.
+  std::string mosaic_key;
   bool north_up = true;    // plain geotransform: no rotation terms, no GCPs
   geo::GeoBox box;         // lon/lat extent; east may exceed 180 if it crosses the antimeridian
   double spacing_deg = 0;  // sample spacing in degrees after reprojection

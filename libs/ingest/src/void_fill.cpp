@@ -132,15 +132,19 @@ uint64_t fill_voids(std::vector<float>& values, int w, int h) {
 }
 
 Result<std::optional<FilledSource>> fill_source_voids(const std::string& path,
-                                                      const std::filesystem::path& copy) {
+                                                      const std::filesystem::path& copy,
+                                                      bool always_copy) {
   const Dataset src = open_raster(path);
   if (!src) return fail(fmt::format("{}: {}", path, gdal_error("cannot open for reading")));
   const int w = GDALGetRasterXSize(src.get()), h = GDALGetRasterYSize(src.get());
   GDALRasterBandH band = GDALGetRasterBand(src.get(), 1);
   std::vector<float> values;
   if (auto err = read_padded(band, 0, 0, w, h, 0, values, path)) return fail(*err);
+  for (float& v : values) {  // infinite samples are nodata (see build.cpp)
+    if (!std::isfinite(v)) v = std::numeric_limits<float>::quiet_NaN();
+  }
   const uint64_t filled = fill_voids(values, w, h);
-  if (filled == 0) return std::optional<FilledSource>{};
+  if (filled == 0 && !always_copy) return std::optional<FilledSource>{};
 
   std::error_code ec;
   std::filesystem::create_directories(copy.parent_path(), ec);

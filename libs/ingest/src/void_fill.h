@@ -28,8 +28,12 @@ struct FilledSource {
 };
 
 // Reads the elevation raster `path` (band 1) into memory, fills its voids and
-// writes a GeoTIFF copy to `copy`. nullopt when the source has no void.
+// writes a GeoTIFF copy to `copy`. nullopt when the source has no void, unless
+// `always_copy`: a source mosaicked with filled ones is copied unchanged, so
+// every file of the mosaic has the same format (GDAL's VRT builder leaves out
+// a file whose data type or colour interpretation differs from the first).
 Result<std::optional<FilledSource>> fill_source_voids(const std::string& path,
-                                                      const std::filesystem::path& copy);
+                                                      const std::filesystem::path& copy,
+                                                      bool always_copy = false);
 
 }  // namespace relief::ingest

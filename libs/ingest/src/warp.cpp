@@ -1,5 +1,6 @@
 #include "warp.h"
 
+#include <cpl_string.h>
 #include <gdal_utils.h>
 #include <gdalwarper.h>
 
@@ -38,7 +39,9 @@ std::vector<MosaicGroup> group_sources(const std::vector<Source>& sources) {
     if (s.north_up && !groups.empty()) {
       // Only join the most recent group, so later inputs still land on top.
       const Source& head = sources[groups.back().members.front()];
-      if (head.north_up && head.crs_wkt == s.crs_wkt) target = &groups.back();
+      if (head.north_up && head.crs_wkt == s.crs_wkt && head.mosaic_key == s.mosaic_key) {
+        target = &groups.back();
+      }
     }
     if (!target) {
       groups.push_back({{}, s.box});
@@ -109,8 +112,22 @@ Result<GDALDatasetH> TileWarper::group_handle(size_t g) {
     std::unique_ptr<GDALBuildVRTOptions, VrtOptionsDeleter> options(
         GDALBuildVRTOptionsNew(const_cast<char**>(argv), nullptr));
     int usage_error = 0;
+    CPLErrorReset();
     ds = Dataset(GDALBuildVRT("", static_cast<int>(paths.size()), nullptr, paths.data(),
                               options.get(), &usage_error));
+    // The VRT builder skips a file it cannot mosaic with a warning only: that
+    // would silently drop an input's data.
+    if (ds) {
+      char** files = GDALGetFileList(ds.get());
+      for (size_t m : group.members) {
+        if (CSLFindString(files, sources_[m].open_path().c_str()) < 0) {
+          CSLDestroy(files);
+          return fail(fmt::format("{}: cannot be mosaicked with {}: {}", sources_[m].path,
+                                  first.path, gdal_error("left out of the mosaic")));
+        }
+      }
+      CSLDestroy(files);
+    }
   }
   if (!ds) return fail(fmt::format("{}: {}", first.path, gdal_error("cannot open for reading")));
   // --src-crs may have supplied a CRS the file lacks.

@@ -1,6 +1,7 @@
 #include "relief/pipeline/fuse_stores.h"
 
 #include <algorithm>
+#include <cmath>
 #include <set>
 
 #include <fmt/format.h>
@@ -69,6 +70,68 @@ void fuse_rgba(const std::vector<const tiles::Raster*>& in, const std::vector<do
   }
 }
 
+// Tile `target`, at a level finer than the input's finest, bilinearly
+// upsampled from the input's tile `ancestor` (bordered rasters, both): an
+// input built to a coarser level still fills the levels below its own. A
+// sample is valid where the nearest ancestor sample is; nodata neighbours are
+// left out of the weights.
+tiles::Raster upsample(const tiles::Raster& ancestor, const geo::TileKey& a,
+                       const geo::TileKey& target, const geo::TileGrid& grid) {
+  const int w = grid.width(), h = grid.height(), b = grid.border();
+  const double f = std::ldexp(1.0, target.level - a.level);
+  tiles::Raster out =
+      tiles::Raster::empty(ancestor.type(), grid.padded_width(), grid.padded_height());
+  const bool rgba = ancestor.type() == tiles::SampleType::UInt8;
+  const int aw = ancestor.width(), ah = ancestor.height();
+  // Ancestor bordered coordinate of a target sample centre (global sample units).
+  auto position = [&](int64_t target_origin, int index, int64_t ancestor_origin) {
+    const double global = (static_cast<double>(target_origin + index) + 0.5) / f - 0.5;
+    return global - static_cast<double>(ancestor_origin) + b;
+  };
+  for (int bj = 0; bj < out.height(); ++bj) {
+    const double v = position(int64_t{target.y} * h, bj - b, int64_t{a.y} * h);
+    const int y0 = std::clamp(static_cast<int>(std::floor(v)), 0, ah - 2);
+    const double fy = std::clamp(v - y0, 0.0, 1.0);
+    for (int bi = 0; bi < out.width(); ++bi) {
+      const double u = position(int64_t{target.x} * w, bi - b, int64_t{a.x} * w);
+      const int x0 = std::clamp(static_cast<int>(std::floor(u)), 0, aw - 2);
+      const double fx = std::clamp(u - x0, 0.0, 1.0);
+      const int nearest_x = x0 + (fx >= 0.5), nearest_y = y0 + (fy >= 0.5);
+      if (!ancestor.valid(nearest_x, nearest_y)) continue;
+      const size_t o = static_cast<size_t>(bj) * out.width() + bi;
+      double sum[4] = {0, 0, 0, 0}, wsum = 0;
+      for (int k = 0; k < 4; ++k) {
+        const int x = x0 + k % 2, y = y0 + k / 2;
+        if (!ancestor.valid(x, y)) continue;
+        const double wgt = (k % 2 ? fx : 1 - fx) * (k / 2 ? fy : 1 - fy);
+        const size_t s = static_cast<size_t>(y) * aw + x;
+        if (rgba) {
+          for (int c = 0; c < 4; ++c) sum[c] += wgt * ancestor.u8()[s * 4 + c];
+        } else {
+          sum[0] += wgt * ancestor.f32()[s];
+        }
+        wsum += wgt;
+      }
+      if (wsum <= 0) continue;
+      if (rgba) {
+        for (int c = 0; c < 4; ++c) {
+          out.u8()[o * 4 + c] =
+              static_cast<uint8_t>(std::clamp(std::lround(sum[c] / wsum), 0L, 255L));
+        }
+        out.u8()[o * 4 + 3] = std::max<uint8_t>(out.u8()[o * 4 + 3], 1);
+      } else {
+        out.f32()[o] = static_cast<float>(sum[0] / wsum);
+      }
+    }
+  }
+  return out;
+}
+
+geo::TileKey ancestor_at(geo::TileKey key, int level) {
+  while (key.level > level) key = *key.parent();
+  return key;
+}
+
 }  // namespace
 
 Result<FuseReport> fuse_stores(const FuseOptions& o, Executor& executor, Progress& progress) {
@@ -80,8 +143,14 @@ Result<FuseReport> fuse_stores(const FuseOptions& o, Executor& executor, Progres
         fmt::format("--weights: {} weights for {} inputs", weights.size(), o.inputs.size()));
   }
   for (double w : weights) {
-    if (!(w > 0) || !std::isfinite(w)) return fail(fmt::format("--weights: {} is not > 0", w));
+    if (!(w > 0) || !std::isfinite(w)) {
+      return fail(fmt::format("--weights: {} is not > 0 and finite", w));
+    }
   }
+  // Only the ratios matter: scaled to at most 1, weighted sums of float
+  // samples cannot overflow (1e308 + 1e308 would be inf, and inf / inf NaN).
+  const double largest = *std::max_element(weights.begin(), weights.end());
+  for (double& w : weights) w /= largest;
   std::vector<tiles::Store> stores;
   for (const auto& path : o.inputs) {
     stores.push_back(RELIEF_TRY(tiles::Store::open(path)));
@@ -110,7 +179,20 @@ Result<FuseReport> fuse_stores(const FuseOptions& o, Executor& executor, Progres
   for (int level = manifest.min_level; level <= manifest.max_level; ++level) {
     std::set<geo::TileKey> union_keys;
     for (const auto& s : stores) {
-      for (const auto& e : s.index(level).entries()) union_keys.insert(e.key);
+      const int finest = s.manifest().max_level;
+      if (level <= finest) {
+        for (const auto& e : s.index(level).entries()) union_keys.insert(e.key);
+        continue;
+      }
+      // Below an input's finest level: every descendant of its finest tiles.
+      const uint32_t n = 1u << (level - finest);
+      for (const auto& e : s.index(finest).entries()) {
+        for (uint32_t dy = 0; dy < n; ++dy) {
+          for (uint32_t dx = 0; dx < n; ++dx) {
+            union_keys.insert({level, e.key.x * n + dx, e.key.y * n + dy});
+          }
+        }
+      }
     }
     const std::vector<geo::TileKey> keys(union_keys.begin(), union_keys.end());
     progress.begin(fmt::format("fuse level {}", level), keys.size());
@@ -123,10 +205,13 @@ Result<FuseReport> fuse_stores(const FuseOptions& o, Executor& executor, Progres
       // The fused bounds lie within the inputs' bounds: no scan needed.
       tiles::IndexEntry bounds{key, INFINITY, -INFINITY, 0, 0};
       for (size_t i = 0; i < stores.size(); ++i) {
-        const tiles::IndexEntry* e = stores[i].index(level).find(key);
+        const int finest = stores[i].manifest().max_level;
+        const geo::TileKey source = ancestor_at(key, finest);
+        const tiles::IndexEntry* e = stores[i].index(source.level).find(source);
         if (!e) continue;
-        auto tile = stores[i].read_tile(key);
+        auto tile = stores[i].read_tile(source);
         if (!tile) return error.set(tile.error());
+        if (source.level != key.level) tile->raster = upsample(tile->raster, source, key, grid);
         held.push_back(std::move(*tile));
         rasters[i] = &held.back().raster;
         bounds.min = std::min(bounds.min, e->min);
@@ -139,8 +224,12 @@ Result<FuseReport> fuse_stores(const FuseOptions& o, Executor& executor, Progres
       } else {
         fuse_rgba(rasters, weights, o.mode, fused);
       }
-      if (auto st = output.write(key, fused, border, manifest.codec, &bounds); !st) {
-        error.set(st.error());
+      // Descendants of an upsampled tile can miss its data: no empty tiles.
+      const bool empty = fused.stats(border, border, grid.width(), grid.height()).valid_count == 0;
+      if (!empty) {
+        if (auto st = output.write(key, fused, border, manifest.codec, &bounds); !st) {
+          error.set(st.error());
+        }
       }
       progress.advance();
     });

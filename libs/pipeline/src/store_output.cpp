@@ -6,6 +6,7 @@
 
 #include <fmt/format.h>
 
+#include "relief/base/file_io.h"
 #include "relief/tiles/assemble.h"
 
 namespace relief::pipeline {
@@ -21,8 +22,11 @@ Result<StoreOutput> StoreOutput::create(const fs::path& output, int min_level, i
   if (!fs::is_directory(parent, ec)) {
     return fail(fmt::format("{}: no such directory", parent.string()));
   }
+  // A killed fuse or process left its temporary directory: remove those of
+  // dead processes (never another running one's).
+  static_cast<void>(remove_stale_temporaries_of(output));
   fs::path temp = output;
-  temp += fmt::format(".tmp.{}", ::getpid());
+  temp += fmt::format("{}{}", kTempMarker, ::getpid());
   fs::remove_all(temp, ec);
   if (!fs::create_directory(temp, ec)) {
     return fail(fmt::format("{}: cannot create: {}", temp.string(), ec.message()));

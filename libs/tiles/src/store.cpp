@@ -113,7 +113,26 @@ Status write_level_index(const fs::path& root, const LevelIndex& index) {
 }
 
 Status write_manifest(const fs::path& root, const Manifest& manifest) {
-  return write_text_file_atomic(root / kManifestName, manifest.to_json(), true);
+  const fs::path path = root / kManifestName;
+  // JSON has no infinity or NaN (they would be written as null): a manifest
+  // that cannot be read back would leave a store that nothing opens.
+  const std::pair<const char*, double> numbers[] = {
+      {"statistics min", manifest.stats.min},       {"statistics max", manifest.stats.max},
+      {"statistics mean", manifest.stats.mean},     {"statistics std", manifest.stats.stddev},
+      {"extent west", manifest.extent.west},        {"extent south", manifest.extent.south},
+      {"extent east", manifest.extent.east},        {"extent north", manifest.extent.north},
+      {"codec max_error", manifest.codec.max_error}};
+  for (const auto& [name, value] : numbers) {
+    if (!std::isfinite(value)) {
+      return fail(fmt::format("{}: not written: its {} is {} (not a finite number)", path.string(),
+                              name, value));
+    }
+  }
+  const std::string text = manifest.to_json();
+  if (auto back = Manifest::from_json(text, path.string()); !back) {
+    return fail(fmt::format("not written: {}", back.error().message));
+  }
+  return write_text_file_atomic(path, text, true);
 }
 
 }  // namespace relief::tiles

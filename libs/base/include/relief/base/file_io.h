@@ -29,9 +29,17 @@ Status write_file_atomic(const std::filesystem::path& path, std::span<const std:
 Status write_text_file_atomic(const std::filesystem::path& path, std::string_view text,
                               bool durable = true);
 
-// Temporary files left behind by a killed writer end with this marker plus a suffix.
+// Temporary files left behind by a killed writer end with this marker plus a
+// suffix that starts with the writer's process id: "<final>.tmp.<pid>[.<n>]".
 inline constexpr std::string_view kTempMarker = ".tmp.";
 bool is_temporary_file(const std::filesystem::path& path);
+// A temporary name for `final_path` owned by this process.
+std::string temporary_name(const std::filesystem::path& final_path);
+// A temporary file (or directory) whose writing process is no longer running.
+bool is_stale_temporary_file(const std::filesystem::path& path);
+// Removes the stale temporaries of `final_path` (files or directories named
+// "<final_path>.tmp.<pid>..." of dead processes) beside it; returns how many.
+Result<uint64_t> remove_stale_temporaries_of(const std::filesystem::path& final_path);
 
 // Human-readable description of errno for messages.
 std::string errno_text(int err);

@@ -6,5 +6,7 @@ namespace relief {
 
 // Resident set size in bytes (Linux /proc/self/statm), 0 if unknown.
 uint64_t resident_set_bytes();
+// Physical memory of the machine in bytes, 0 if unknown.
+uint64_t physical_memory_bytes();
 
 }  // namespace relief
