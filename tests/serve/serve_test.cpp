@@ -99,6 +99,23 @@ TEST_F(ServeTest, KeepAliveServesSeveralRequestsOnOneConnection) {
   ::close(fd);
 }
 
+// Answers to HEAD carry no body, errors included, so the next answer on the
+// connection is read from its start.
+TEST_F(ServeTest, HeadAnswersHaveNoBodyOnAKeptConnection) {
+  const int fd = connect_client(port_);
+  const std::string head = "HEAD /10/fff.rtile HTTP/1.1\r\nHost: x\r\n\r\n";
+  ::send(fd, head.data(), head.size(), MSG_NOSIGNAL);
+  const Response h = read_response(fd, true);
+  EXPECT_EQ(h.status, 404);
+  EXPECT_EQ(h.body, "");  // nothing after the head
+  const std::string get = "GET /manifest.json HTTP/1.1\r\nHost: x\r\n\r\n";
+  ::send(fd, get.data(), get.size(), MSG_NOSIGNAL);
+  const Response r = read_response(fd);
+  EXPECT_EQ(r.status, 200);
+  EXPECT_EQ(r.body, file_text(store_ / "manifest.json"));
+  ::close(fd);
+}
+
 TEST_F(ServeTest, RequestsOutsideTheStoreAreRefused) {
   for (const char* path :
        {"/../../etc/passwd", "/secret.txt", "/10/../manifest.json", "//manifest.json",

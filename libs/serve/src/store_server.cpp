@@ -202,6 +202,9 @@ void Loop::read_some(Connection& c, Clock::time_point now) {
     const ssize_t n = ::recv(c.fd, buffer, sizeof buffer, 0);
     if (n > 0) {
       c.in.append(buffer, static_cast<size_t>(n));
+      // A short read drained the socket: skip the recv that would say EAGAIN
+      // (level-triggered epoll reports anything that arrives later).
+      if (static_cast<size_t>(n) < sizeof buffer) break;
       continue;
     }
     if (n == 0) {
