@@ -28,7 +28,7 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 constexpr size_t kFileChunkBytes = 256 * 1024;
-constexpr int kWaitMilliseconds = 100;  // deadlines are checked at least this often
+constexpr int kWaitMilliseconds = 100;  // with connections open, deadlines are checked this often
 constexpr auto kSweepInterval = std::chrono::milliseconds(50);
 
 // One client connection, owned by the event loop that accepted it. It reads
@@ -140,7 +140,9 @@ void Loop::run() {
   epoll_event events[128];
   auto last_sweep = Clock::now();
   while (!server_.stopping_) {
-    const int n = ::epoll_wait(epoll_fd_, events, 128, kWaitMilliseconds);
+    // With no connection there is no deadline: sleep until a client or stop() comes.
+    const int wait = connections_.empty() ? -1 : kWaitMilliseconds;
+    const int n = ::epoll_wait(epoll_fd_, events, 128, wait);
     const auto now = server_.options_.clock();
     for (int i = 0; i < n; ++i) {
       const int fd = events[i].data.fd;
