@@ -1,7 +1,7 @@
 // `relief serve` on loopback: store files byte for byte with the right
-// headers, keep-alive, ETag revalidation, many clients at once; every request
-// outside the store refused; and a real nginx serving the same directory
-// answers identically.
+// headers, keep-alive, ETag revalidation, byte ranges, many clients at once;
+// every request outside the store refused; and a real nginx serving the same
+// directory answers identically.
 #include <gtest/gtest.h>
 
 #include <arpa/inet.h>
@@ -18,6 +18,9 @@
 #include <sstream>
 #include <thread>
 
+#include <fmt/format.h>
+
+#include "http_client.h"
 #include "relief/base/file_io.h"
 #include "relief/serve/store_server.h"
 #include "servers.h"
@@ -26,60 +29,6 @@
 namespace relief::testing {
 namespace {
 namespace fs = std::filesystem;
-
-struct Response {
-  int status = 0;
-  std::map<std::string, std::string> headers;  // lower-case names
-  std::string body;
-};
-
-// Reads one response from a connection (Content-Length framed, or to EOF).
-Response read_response(int fd, bool head_request = false) {
-  std::string data;
-  char buf[65536];
-  size_t header_end;
-  while ((header_end = data.find("\r\n\r\n")) == std::string::npos) {
-    const ssize_t n = ::recv(fd, buf, sizeof buf, 0);
-    if (n <= 0) return {};
-    data.append(buf, static_cast<size_t>(n));
-  }
-  Response r;
-  std::istringstream head(data.substr(0, header_end));
-  std::string line;
-  std::getline(head, line);
-  r.status = std::stoi(line.substr(9, 3));
-  while (std::getline(head, line)) {
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    const size_t colon = line.find(':');
-    if (colon == std::string::npos) continue;
-    std::string name = line.substr(0, colon);
-    for (char& c : name) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    r.headers[name] = line.substr(colon + 2);
-  }
-  r.body = data.substr(header_end + 4);
-  const bool framed = r.headers.count("content-length");
-  const size_t want = framed ? std::stoul(r.headers["content-length"]) : 0;
-  if (head_request || r.status == 304) return r;
-  while (framed ? r.body.size() < want : true) {
-    const ssize_t n = ::recv(fd, buf, sizeof buf, 0);
-    if (n <= 0) break;
-    r.body.append(buf, static_cast<size_t>(n));
-  }
-  return r;
-}
-
-Response request(int port, const std::string& raw, bool head = false) {
-  const int fd = connect_to(port);
-  EXPECT_GE(fd, 0);
-  ::send(fd, raw.data(), raw.size(), MSG_NOSIGNAL);
-  Response r = read_response(fd, head);
-  ::close(fd);
-  return r;
-}
-
-Response get(int port, const std::string& path) {
-  return request(port, "GET " + path + " HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n");
-}
 
 std::string file_text(const fs::path& p) {
   auto bytes = read_file(p);
@@ -139,7 +88,7 @@ TEST_F(ServeTest, StoreFilesWithHeaders) {
 }
 
 TEST_F(ServeTest, KeepAliveServesSeveralRequestsOnOneConnection) {
-  const int fd = connect_to(port_);
+  const int fd = connect_client(port_);
   for (int i = 0; i < 5; ++i) {
     const std::string req = "GET /manifest.json HTTP/1.1\r\nHost: x\r\n\r\n";
     ::send(fd, req.data(), req.size(), MSG_NOSIGNAL);
@@ -147,6 +96,23 @@ TEST_F(ServeTest, KeepAliveServesSeveralRequestsOnOneConnection) {
     ASSERT_EQ(r.status, 200) << i;
     EXPECT_EQ(r.body, file_text(store_ / "manifest.json"));
   }
+  ::close(fd);
+}
+
+// Answers to HEAD carry no body, errors included, so the next answer on the
+// connection is read from its start.
+TEST_F(ServeTest, HeadAnswersHaveNoBodyOnAKeptConnection) {
+  const int fd = connect_client(port_);
+  const std::string head = "HEAD /10/fff.rtile HTTP/1.1\r\nHost: x\r\n\r\n";
+  ::send(fd, head.data(), head.size(), MSG_NOSIGNAL);
+  const Response h = read_response(fd, true);
+  EXPECT_EQ(h.status, 404);
+  EXPECT_EQ(h.body, "");  // nothing after the head
+  const std::string get = "GET /manifest.json HTTP/1.1\r\nHost: x\r\n\r\n";
+  ::send(fd, get.data(), get.size(), MSG_NOSIGNAL);
+  const Response r = read_response(fd);
+  EXPECT_EQ(r.status, 200);
+  EXPECT_EQ(r.body, file_text(store_ / "manifest.json"));
   ::close(fd);
 }
 
@@ -171,6 +137,73 @@ TEST_F(ServeTest, RequestsOutsideTheStoreAreRefused) {
   EXPECT_EQ(request(port_, huge).status, 431);
   // The server is still fine.
   EXPECT_EQ(get(port_, "/manifest.json").status, 200);
+}
+
+// The last header field counts like the others (the head used to be cut
+// before its final line break, so a field sent last was dropped).
+TEST_F(ServeTest, TheLastHeaderFieldCounts) {
+  const std::string tile = some_tile();
+  const Response first = get(port_, tile);
+  ASSERT_EQ(first.status, 200);
+  const std::string etag = first.headers.at("etag");
+  // Connection: close, sent last, ends the connection after the answer.
+  const int fd = connect_client(port_);
+  const std::string close_last =
+      "GET " + tile + " HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n";
+  ::send(fd, close_last.data(), close_last.size(), MSG_NOSIGNAL);
+  EXPECT_EQ(read_response(fd).status, 200);
+  EXPECT_TRUE(closed_by_server(fd));
+  ::close(fd);
+  // If-None-Match sent last revalidates.
+  EXPECT_EQ(
+      request(port_, "GET " + tile + " HTTP/1.1\r\nHost: x\r\nIf-None-Match: " + etag + "\r\n\r\n")
+          .status,
+      304);
+  // "*" matches any current version of a file that exists; a list matches by any member.
+  EXPECT_EQ(request(port_, "GET " + tile + " HTTP/1.1\r\nIf-None-Match: *\r\n\r\n").status, 304);
+  EXPECT_EQ(request(port_, "GET " + tile + " HTTP/1.1\r\nIf-None-Match: \"x\", W/" + etag +
+                               "\r\nHost: x\r\n\r\n")
+                .status,
+            304);
+  EXPECT_EQ(request(port_, "GET " + tile + " HTTP/1.1\r\nIf-None-Match: \"other\"\r\n\r\n").status,
+            200);
+  EXPECT_EQ(request(port_, "GET /10/fff.rtile HTTP/1.1\r\nIf-None-Match: *\r\n\r\n").status, 404);
+}
+
+// Single byte ranges: 206 with Content-Range, 416 past the end; several
+// ranges or a stale If-Range give the whole file.
+TEST_F(ServeTest, SingleByteRanges) {
+  const std::string tile = some_tile(), whole = file_text(store_ / tile.substr(1));
+  ASSERT_GT(whole.size(), 100u);
+  const size_t size = whole.size();
+  const auto ranged = [&](const std::string& range) {
+    return request(port_, "GET " + tile + " HTTP/1.1\r\nHost: x\r\nRange: " + range + "\r\n\r\n");
+  };
+  Response r = ranged("bytes=10-19");
+  EXPECT_EQ(r.status, 206);
+  EXPECT_EQ(r.body, whole.substr(10, 10));
+  EXPECT_EQ(r.headers["content-range"], fmt::format("bytes 10-19/{}", size));
+  r = ranged("bytes=-7");
+  EXPECT_EQ(r.status, 206);
+  EXPECT_EQ(r.body, whole.substr(size - 7));
+  r = ranged("bytes=50-");
+  EXPECT_EQ(r.status, 206);
+  EXPECT_EQ(r.body, whole.substr(50));
+  r = ranged("bytes=0-99999999");
+  EXPECT_EQ(r.status, 206);
+  EXPECT_EQ(r.body, whole);
+  r = ranged(fmt::format("bytes={}-", size));
+  EXPECT_EQ(r.status, 416);
+  EXPECT_EQ(r.headers["content-range"], fmt::format("bytes */{}", size));
+  EXPECT_EQ(ranged("bytes=0-1,5-6").body, whole);
+  EXPECT_EQ(ranged("items=0-1").status, 200);
+  const std::string etag = get(port_, tile).headers.at("etag");
+  r = request(port_,
+              "GET " + tile + " HTTP/1.1\r\nRange: bytes=0-3\r\nIf-Range: " + etag + "\r\n\r\n");
+  EXPECT_EQ(r.status, 206);
+  r = request(port_, "GET " + tile + " HTTP/1.1\r\nRange: bytes=0-3\r\nIf-Range: \"old\"\r\n\r\n");
+  EXPECT_EQ(r.status, 200);
+  EXPECT_EQ(r.body, whole);
 }
 
 TEST_F(ServeTest, ManyClientsAtOnce) {
@@ -200,6 +233,20 @@ TEST_F(ServeTest, NginxServesTheSameStoreIdentically) {
     if (a.status == 200) {
       EXPECT_EQ(a.body, b.body);
       EXPECT_EQ(a.headers.at("content-length"), b.headers.at("content-length"));
+    }
+  }
+  // Ranges and conditional requests on a tile, the header sent last.
+  const std::string tile = some_tile();
+  for (const std::string& field :
+       {std::string("Range: bytes=3-40"), std::string("Range: bytes=-9"),
+        std::string("Range: bytes=99999999-"), std::string("If-None-Match: *")}) {
+    SCOPED_TRACE(field);
+    const std::string raw = "GET " + tile + " HTTP/1.1\r\nHost: x\r\n" + field + "\r\n\r\n";
+    Response a = request(port_, raw), b = request(port, raw);
+    EXPECT_EQ(a.status, b.status);
+    if (a.status == 206) {
+      EXPECT_EQ(a.body, b.body);
+      EXPECT_EQ(a.headers["content-range"], b.headers["content-range"]);
     }
   }
   ::kill(nginx, SIGTERM);

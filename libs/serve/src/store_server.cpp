@@ -4,251 +4,331 @@
 #include <fcntl.h>
 #include <netinet/in.h>
 #include <netinet/tcp.h>
-#include <sys/sendfile.h>
+#include <sys/epoll.h>
+#include <sys/eventfd.h>
+#include <sys/resource.h>
 #include <sys/socket.h>
-#include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
-#include <condition_variable>
 #include <cstring>
-#include <deque>
-#include <mutex>
 #include <thread>
+#include <unordered_map>
 #include <vector>
 
 #include <fmt/format.h>
 
+#include "answer.h"
+#include "http_request.h"
 #include "relief/tiles/store_layout.h"
 
 namespace relief::serve {
 namespace {
 
-constexpr size_t kMaxHeaderBytes = 8192;
-constexpr int kIdleSeconds = 10;
+using Clock = std::chrono::steady_clock;
+constexpr size_t kFileChunkBytes = 256 * 1024;
+constexpr int kWaitMilliseconds = 100;  // with connections open, deadlines are checked this often
+constexpr auto kSweepInterval = std::chrono::milliseconds(50);
 
-struct Request {
-  std::string method, path, version;
-  bool keep_alive = true;
-  std::string if_none_match;
+// One client connection, owned by the event loop that accepted it. It reads
+// a request head (before its read deadline), then writes the answer (making
+// progress before each write deadline), then reads the next head.
+struct Connection {
+  int fd = -1;
+  std::string in;   // received bytes not yet parsed
+  std::string out;  // bytes to send: an answer's head, then file chunks
+  size_t out_sent = 0;
+  int file = -1;  // the answer's file, read chunk by chunk
+  uint64_t file_pos = 0, file_end = 0;
+  bool writing = false;      // an answer is in progress
+  bool close_after = false;  // end the connection once the answer is sent
+  bool peer_done = false;    // the client shut its side: answer what is buffered, then end
+  Clock::time_point deadline;
 };
 
-bool send_all(int fd, const std::string& s) {
-  size_t sent = 0;
-  while (sent < s.size()) {
-    const ssize_t n = ::send(fd, s.data() + sent, s.size() - sent, MSG_NOSIGNAL);
-    if (n <= 0) return false;
-    sent += static_cast<size_t>(n);
+enum class Progress { blocked, done, closed };
+
+class Server;
+
+// An epoll loop on its own thread: accepts from the shared listener (woken
+// exclusively, so one loop takes each burst) and serves its connections
+// without blocking on any of them.
+class Loop {
+ public:
+  explicit Loop(Server& server);
+  ~Loop();
+  void run();
+  void wake() {
+    const uint64_t one = 1;
+    [[maybe_unused]] const ssize_t n = ::write(wake_fd_, &one, sizeof one);
   }
-  return true;
-}
 
-std::string status_line(int code) {
-  switch (code) {
-    case 200:
-      return "200 OK";
-    case 304:
-      return "304 Not Modified";
-    case 400:
-      return "400 Bad Request";
-    case 404:
-      return "404 Not Found";
-    case 405:
-      return "405 Method Not Allowed";
-    case 431:
-      return "431 Request Header Fields Too Large";
-    default:
-      return "500 Internal Server Error";
-  }
-}
+ private:
+  void accept_some(Clock::time_point now);
+  void on_event(Connection& c, uint32_t events, Clock::time_point now);
+  void read_some(Connection& c, Clock::time_point now);
+  // Answers every complete request head buffered; false if the connection ended.
+  bool serve_buffered(Connection& c, Clock::time_point now);
+  void start_answer(Connection& c, Answer answer, Clock::time_point now);
+  Progress write_some(Connection& c, Clock::time_point now);
+  bool fill_from_file(Connection& c);
+  void watch(Connection& c, uint32_t events, int op = EPOLL_CTL_MOD);
+  void close_connection(Connection& c);
+  void sweep(Clock::time_point now);
 
-bool send_status(int fd, int code, bool keep_alive, const std::string& extra = "") {
-  const std::string body = status_line(code) + "\n";
-  return send_all(fd, fmt::format("HTTP/1.1 {}\r\nServer: relief\r\nContent-Type: text/plain\r\n"
-                                  "Content-Length: {}\r\nConnection: {}\r\n{}\r\n{}",
-                                  status_line(code), body.size(),
-                                  keep_alive ? "keep-alive" : "close", extra, body));
-}
-
-std::string lower(std::string s) {
-  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return s;
-}
-
-// Parses the request head; nullopt for anything malformed.
-std::optional<Request> parse(const std::string& head) {
-  Request r;
-  const size_t line_end = head.find("\r\n");
-  const std::string line = head.substr(0, line_end);
-  const size_t a = line.find(' '), b = line.rfind(' ');
-  if (a == std::string::npos || b == a) return std::nullopt;
-  r.method = line.substr(0, a);
-  r.path = line.substr(a + 1, b - a - 1);
-  r.version = line.substr(b + 1);
-  if (r.version != "HTTP/1.1" && r.version != "HTTP/1.0") return std::nullopt;
-  if (r.path.empty() || r.path.find(' ') != std::string::npos) return std::nullopt;
-  r.keep_alive = r.version == "HTTP/1.1";
-  size_t pos = line_end + 2;
-  while (pos < head.size()) {
-    const size_t end = head.find("\r\n", pos);
-    if (end == std::string::npos || end == pos) break;
-    const std::string field = head.substr(pos, end - pos);
-    const size_t colon = field.find(':');
-    if (colon == std::string::npos) return std::nullopt;
-    const std::string name = lower(field.substr(0, colon));
-    std::string value = field.substr(colon + 1);
-    while (!value.empty() && value.front() == ' ') value.erase(0, 1);
-    if (name == "connection") {
-      const std::string v = lower(value);
-      if (v == "close") r.keep_alive = false;
-      if (v == "keep-alive") r.keep_alive = true;
-    } else if (name == "if-none-match") {
-      r.if_none_match = value;
-    }
-    pos = end + 2;
-  }
-  return r;
-}
+  Server& server_;
+  int epoll_fd_ = -1, wake_fd_ = -1;
+  std::unordered_map<int, Connection> connections_;
+};
 
 class Server final : public StoreServer {
  public:
-  Server(std::filesystem::path root, int listener, int port, int threads)
-      : root_(std::move(root)), listener_(listener), port_(port) {
-    for (int i = 0; i < threads; ++i) workers_.emplace_back([this] { work(); });
-    acceptor_ = std::thread([this] { accept_loop(); });
+  Server(const ServeOptions& o, int listener, int port)
+      : options_(o), listener_(listener), port_(port) {
+    if (!options_.clock) options_.clock = [] { return Clock::now(); };
+    // Each connection holds a socket and, while answering, a file: stay below
+    // the descriptor limit, so accept() never fails for want of one.
+    rlimit files{};
+    if (::getrlimit(RLIMIT_NOFILE, &files) == 0 && files.rlim_cur != RLIM_INFINITY) {
+      const auto spare = static_cast<int>(std::min<rlim_t>(files.rlim_cur, 1 << 20) / 2) - 16;
+      options_.max_connections = std::max(1, std::min(options_.max_connections, spare));
+    }
+    for (int i = 0; i < std::max(1, o.threads); ++i)
+      loops_.push_back(std::make_unique<Loop>(*this));
+    for (auto& loop : loops_) threads_.emplace_back([l = loop.get()] { l->run(); });
   }
   ~Server() override { stop(); }
   int port() const override { return port_; }
 
   void stop() override {
     if (stopping_.exchange(true)) return;
-    ::shutdown(listener_, SHUT_RDWR);
+    for (auto& loop : loops_) loop->wake();
+    for (auto& t : threads_) t.join();
+    loops_.clear();
     ::close(listener_);
-    if (acceptor_.joinable()) acceptor_.join();
-    {
-      std::lock_guard lock(mutex_);
-      for (int fd : queue_) ::close(fd);
-      queue_.clear();
-      for (int fd : active_) ::shutdown(fd, SHUT_RDWR);
-    }
-    ready_.notify_all();
-    for (auto& t : workers_) t.join();
   }
 
- private:
-  void accept_loop() {
-    while (!stopping_) {
-      const int fd = ::accept(listener_, nullptr, nullptr);
-      if (fd < 0) {
-        if (stopping_) return;
-        continue;
-      }
-      timeval idle{kIdleSeconds, 0};
-      ::setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &idle, sizeof idle);
-      const int one = 1;
-      ::setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
-      std::lock_guard lock(mutex_);
-      queue_.push_back(fd);
-      ready_.notify_one();
-    }
-  }
-
-  void work() {
-    for (;;) {
-      int fd = -1;
-      {
-        std::unique_lock lock(mutex_);
-        ready_.wait(lock, [this] { return stopping_ || !queue_.empty(); });
-        if (queue_.empty()) return;
-        fd = queue_.front();
-        queue_.pop_front();
-        active_.push_back(fd);
-      }
-      serve_connection(fd);
-      {
-        std::lock_guard lock(mutex_);
-        std::erase(active_, fd);
-      }
-      ::close(fd);
-    }
-  }
-
-  void serve_connection(int fd) {
-    std::string buffer;
-    char chunk[4096];
-    for (;;) {
-      size_t end;
-      while ((end = buffer.find("\r\n\r\n")) == std::string::npos) {
-        if (buffer.size() > kMaxHeaderBytes) {
-          send_status(fd, 431, false);
-          return;
-        }
-        const ssize_t n = ::recv(fd, chunk, sizeof chunk, 0);
-        if (n <= 0) return;  // closed, idle timeout or stop
-        buffer.append(chunk, static_cast<size_t>(n));
-      }
-      if (end > kMaxHeaderBytes) {
-        send_status(fd, 431, false);
-        return;
-      }
-      const std::string head = buffer.substr(0, end);
-      buffer.erase(0, end + 4);
-      const auto request = parse(head);
-      if (!request) {
-        send_status(fd, 400, false);
-        return;
-      }
-      if (!respond(fd, *request) || !request->keep_alive) return;
-    }
-  }
-
-  bool respond(int fd, const Request& r) {
-    const bool head = r.method == "HEAD";
-    if (r.method != "GET" && !head)
-      return send_status(fd, 405, r.keep_alive, "Allow: GET, HEAD\r\n");
-    const auto file = store_file_for(r.path);
-    if (!file) return send_status(fd, 404, r.keep_alive);
-    const int in = ::open((root_ / *file).c_str(), O_RDONLY | O_NOFOLLOW | O_CLOEXEC);
-    if (in < 0) return send_status(fd, 404, r.keep_alive);
-    struct stat st {};
-    if (::fstat(in, &st) != 0 || !S_ISREG(st.st_mode)) {
-      ::close(in);
-      return send_status(fd, 404, r.keep_alive);
-    }
-    // Store files are written once, atomically: size and modification time name a version.
-    const std::string etag =
-        fmt::format("\"{:x}-{:x}{:09x}\"", st.st_size, st.st_mtim.tv_sec, st.st_mtim.tv_nsec);
-    const std::string common = fmt::format(
-        "Server: relief\r\nETag: {}\r\nCache-Control: public, max-age=300\r\n"
-        "Connection: {}\r\n",
-        etag, r.keep_alive ? "keep-alive" : "close");
-    if (!r.if_none_match.empty() && r.if_none_match == etag) {
-      ::close(in);
-      return send_all(fd, "HTTP/1.1 304 Not Modified\r\n" + common + "\r\n");
-    }
-    const char* type = file->ends_with(".json") ? "application/json" : "application/octet-stream";
-    bool ok = send_all(
-        fd, fmt::format("HTTP/1.1 200 OK\r\n{}Content-Type: {}\r\nContent-Length: {}\r\n\r\n",
-                        common, type, st.st_size));
-    off_t offset = 0;
-    while (ok && !head && offset < st.st_size) {
-      const ssize_t n = ::sendfile(fd, in, &offset, static_cast<size_t>(st.st_size - offset));
-      if (n <= 0) ok = false;
-    }
-    ::close(in);
-    return ok;
-  }
-
-  std::filesystem::path root_;
+  ServeOptions options_;
   int listener_, port_;
   std::atomic<bool> stopping_{false};
-  std::mutex mutex_;
-  std::condition_variable ready_;
-  std::deque<int> queue_;
-  std::vector<int> active_;
-  std::vector<std::thread> workers_;
-  std::thread acceptor_;
+  std::atomic<int> open_connections_{0};
+
+ private:
+  std::vector<std::unique_ptr<Loop>> loops_;
+  std::vector<std::thread> threads_;
 };
+
+Loop::Loop(Server& server) : server_(server) {
+  epoll_fd_ = ::epoll_create1(EPOLL_CLOEXEC);
+  wake_fd_ = ::eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
+  epoll_event e{};
+  e.events = EPOLLIN;
+  e.data.fd = wake_fd_;
+  ::epoll_ctl(epoll_fd_, EPOLL_CTL_ADD, wake_fd_, &e);
+  e.events = EPOLLIN | EPOLLEXCLUSIVE;
+  e.data.fd = server_.listener_;
+  ::epoll_ctl(epoll_fd_, EPOLL_CTL_ADD, server_.listener_, &e);
+}
+
+Loop::~Loop() {
+  ::close(epoll_fd_);
+  ::close(wake_fd_);
+}
+
+void Loop::run() {
+  epoll_event events[128];
+  auto last_sweep = Clock::now();
+  while (!server_.stopping_) {
+    // With no connection there is no deadline: sleep until a client or stop() comes.
+    const int wait = connections_.empty() ? -1 : kWaitMilliseconds;
+    const int n = ::epoll_wait(epoll_fd_, events, 128, wait);
+    const auto now = server_.options_.clock();
+    for (int i = 0; i < n; ++i) {
+      const int fd = events[i].data.fd;
+      if (fd == wake_fd_) continue;  // stop() woke us: the loop condition decides
+      if (fd == server_.listener_) {
+        accept_some(now);
+        continue;
+      }
+      const auto it = connections_.find(fd);
+      if (it != connections_.end()) on_event(it->second, events[i].events, now);
+    }
+    // The sweep runs on real time; deadlines are measured on the given clock.
+    if (Clock::now() - last_sweep >= kSweepInterval) {
+      sweep(now);
+      last_sweep = Clock::now();
+    }
+  }
+  while (!connections_.empty()) close_connection(connections_.begin()->second);
+}
+
+void Loop::accept_some(Clock::time_point now) {
+  for (int i = 0; i < 64; ++i) {
+    const int fd = ::accept4(server_.listener_, nullptr, nullptr, SOCK_NONBLOCK | SOCK_CLOEXEC);
+    if (fd < 0) return;  // none left (EAGAIN), or out of descriptors: the limit should prevent it
+    if (server_.open_connections_.fetch_add(1) >= server_.options_.max_connections) {
+      --server_.open_connections_;
+      // Over the limit: say so at once (best effort, never waiting) rather than queueing.
+      const Answer busy = status_answer(503, false);
+      [[maybe_unused]] const ssize_t sent =
+          ::send(fd, busy.head.data(), busy.head.size(), MSG_NOSIGNAL | MSG_DONTWAIT);
+      ::close(fd);
+      continue;
+    }
+    const int one = 1;
+    ::setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
+    Connection& c = connections_[fd];
+    c.fd = fd;
+    c.deadline = now + server_.options_.read_timeout;
+    watch(c, EPOLLIN, EPOLL_CTL_ADD);
+  }
+}
+
+void Loop::on_event(Connection& c, uint32_t events, Clock::time_point now) {
+  if (now >= c.deadline) return close_connection(c);
+  if (c.writing) {
+    if (events & (EPOLLOUT | EPOLLERR | EPOLLHUP)) {
+      if (write_some(c, now) == Progress::done && serve_buffered(c, now)) {
+        watch(c, c.writing ? EPOLLOUT : EPOLLIN);
+      }
+    }
+    return;
+  }
+  read_some(c, now);
+}
+
+void Loop::read_some(Connection& c, Clock::time_point now) {
+  char buffer[16384];
+  while (c.in.size() <= kMaxRequestHeadBytes) {
+    const ssize_t n = ::recv(c.fd, buffer, sizeof buffer, 0);
+    if (n > 0) {
+      c.in.append(buffer, static_cast<size_t>(n));
+      // A short read drained the socket: skip the recv that would say EAGAIN
+      // (level-triggered epoll reports anything that arrives later).
+      if (static_cast<size_t>(n) < sizeof buffer) break;
+      continue;
+    }
+    if (n == 0) {
+      c.peer_done = true;
+      break;
+    }
+    if (errno == EAGAIN || errno == EWOULDBLOCK) break;
+    if (errno == EINTR) continue;
+    return close_connection(c);
+  }
+  if (serve_buffered(c, now) && c.writing) watch(c, EPOLLOUT);
+}
+
+bool Loop::serve_buffered(Connection& c, Clock::time_point now) {
+  while (!c.writing) {
+    const size_t end = c.in.find("\r\n\r\n");
+    if (end == std::string::npos || end + 4 > kMaxRequestHeadBytes) {
+      if (c.in.size() > kMaxRequestHeadBytes) {
+        start_answer(c, status_answer(431, false), now);
+      } else if (c.peer_done) {
+        close_connection(c);
+        return false;
+      } else {
+        return true;  // wait for the rest of the head
+      }
+    } else {
+      const auto request = parse_request_head(std::string_view(c.in).substr(0, end + 4));
+      c.in.erase(0, end + 4);
+      start_answer(
+          c, request ? answer_request(server_.options_.root, *request) : status_answer(400, false),
+          now);
+    }
+    if (write_some(c, now) == Progress::closed) return false;
+  }
+  return true;
+}
+
+void Loop::start_answer(Connection& c, Answer answer, Clock::time_point now) {
+  c.writing = true;
+  c.out = std::move(answer.head);
+  c.out_sent = 0;
+  c.file = answer.file;
+  c.file_pos = answer.offset;
+  c.file_end = answer.offset + answer.length;
+  c.close_after = answer.close || c.peer_done;
+  c.deadline = now + server_.options_.write_timeout;
+  if (c.file >= 0 && !fill_from_file(c)) c.close_after = true;
+}
+
+// Appends the file's next chunk to the output; false if the file ended early.
+bool Loop::fill_from_file(Connection& c) {
+  const size_t want =
+      static_cast<size_t>(std::min<uint64_t>(kFileChunkBytes, c.file_end - c.file_pos));
+  const size_t old = c.out.size();
+  c.out.resize(old + want);
+  const ssize_t n = ::pread(c.file, c.out.data() + old, want, static_cast<off_t>(c.file_pos));
+  if (n <= 0) {
+    c.out.resize(old);
+    c.file_pos = c.file_end;  // the file shrank under us: end the connection after what we have
+    return false;
+  }
+  c.out.resize(old + static_cast<size_t>(n));
+  c.file_pos += static_cast<uint64_t>(n);
+  return true;
+}
+
+Progress Loop::write_some(Connection& c, Clock::time_point now) {
+  for (;;) {
+    if (c.out_sent == c.out.size()) {
+      c.out.clear();
+      c.out_sent = 0;
+      if (c.file_pos < c.file_end) {
+        if (!fill_from_file(c)) c.close_after = true;
+        continue;
+      }
+      if (c.file >= 0) ::close(c.file);
+      c.file = -1;
+      if (c.close_after) {
+        close_connection(c);
+        return Progress::closed;
+      }
+      c.writing = false;
+      c.deadline = now + server_.options_.read_timeout;
+      return Progress::done;
+    }
+    // MSG_NOSIGNAL: a client that hung up is an error value here, never a SIGPIPE.
+    const ssize_t n =
+        ::send(c.fd, c.out.data() + c.out_sent, c.out.size() - c.out_sent, MSG_NOSIGNAL);
+    if (n > 0) {
+      c.out_sent += static_cast<size_t>(n);
+      c.deadline = now + server_.options_.write_timeout;  // progress moves the deadline
+      continue;
+    }
+    if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) return Progress::blocked;
+    if (n < 0 && errno == EINTR) continue;
+    close_connection(c);
+    return Progress::closed;
+  }
+}
+
+void Loop::watch(Connection& c, uint32_t events, int op) {
+  epoll_event e{};
+  e.events = events;
+  e.data.fd = c.fd;
+  ::epoll_ctl(epoll_fd_, op, c.fd, &e);
+}
+
+void Loop::close_connection(Connection& c) {
+  const int fd = c.fd;
+  if (c.file >= 0) ::close(c.file);
+  ::close(fd);  // also leaves the epoll set
+  --server_.open_connections_;
+  connections_.erase(fd);  // c is gone from here on
+}
+
+void Loop::sweep(Clock::time_point now) {
+  std::vector<int> expired;
+  for (const auto& [fd, c] : connections_) {
+    if (now >= c.deadline) expired.push_back(fd);
+  }
+  for (int fd : expired) close_connection(connections_.at(fd));
+}
 
 }  // namespace
 
@@ -274,6 +354,7 @@ Result<std::unique_ptr<StoreServer>> StoreServer::start(const ServeOptions& o) {
     return fail(fmt::format("{}: not a relief store (no manifest.json)", o.root.string()));
   }
   if (o.port < 0 || o.port > 65535) return fail(fmt::format("--port: {} is not a port", o.port));
+  if (o.max_connections < 1) return fail("serve: the connection limit must be at least 1");
   sockaddr_in address{};
   address.sin_family = AF_INET;
   address.sin_port = htons(static_cast<uint16_t>(o.port));
@@ -285,15 +366,15 @@ Result<std::unique_ptr<StoreServer>> StoreServer::start(const ServeOptions& o) {
   const int one = 1;
   ::setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one);
   if (::bind(fd, reinterpret_cast<sockaddr*>(&address), sizeof address) != 0 ||
-      ::listen(fd, 256) != 0) {
+      ::listen(fd, SOMAXCONN) != 0) {
     const std::string reason = std::strerror(errno);
     ::close(fd);
     return fail(fmt::format("{}:{}: cannot listen: {}", o.bind, o.port, reason));
   }
   socklen_t len = sizeof address;
   ::getsockname(fd, reinterpret_cast<sockaddr*>(&address), &len);
-  return std::unique_ptr<StoreServer>(
-      new Server(o.root, fd, ntohs(address.sin_port), std::max(1, o.threads)));
+  ::fcntl(fd, F_SETFL, O_NONBLOCK);  // the loops accept until EAGAIN
+  return std::unique_ptr<StoreServer>(new Server(o, fd, ntohs(address.sin_port)));
 }
 
 }  // namespace relief::serve

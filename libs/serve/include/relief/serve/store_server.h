@@ -2,10 +2,14 @@
 // `relief serve`: a read-only HTTP/1.1 server for one store directory. Only
 // the store's own files are served (manifest.json, level indices, tiles, by
 // their canonical paths), so no request can reach anything else; GET and HEAD
-// with keep-alive, Content-Length, ETag (If-None-Match gives 304) and cache
-// headers; a pool of worker threads serves many clients at once.
+// with keep-alive, Content-Length, ETag (If-None-Match gives 304), single byte
+// ranges and cache headers. Event loops (epoll) serve every connection without
+// blocking on any one client; deadlines and a connection limit keep slow, idle
+// or hostile clients from starving the others.
+#include <chrono>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -17,8 +21,20 @@ namespace relief::serve {
 struct ServeOptions {
   std::filesystem::path root;
   std::string bind = "127.0.0.1";
-  int port = 8080;  // 0: any free port (see StoreServer::port)
-  int threads = 16;
+  int port = 8080;   // 0: any free port (see StoreServer::port)
+  int threads = 16;  // event-loop threads; each serves any number of connections
+  // Connections open at once; further ones get 503 and are closed at once.
+  int max_connections = 1024;
+  // A request head must arrive whole within this time of the connection
+  // opening or the previous answer ending (so idle keep-alive connections and
+  // clients sending a byte at a time are closed after it).
+  std::chrono::milliseconds read_timeout{10'000};
+  // An answer that makes no progress for this long (a client that does not
+  // read) is dropped.
+  std::chrono::milliseconds write_timeout{10'000};
+  // The clock deadlines are measured with (tests move it forward); empty:
+  // std::chrono::steady_clock::now.
+  std::function<std::chrono::steady_clock::time_point()> clock;
 };
 
 class StoreServer {

@@ -1,0 +1,225 @@
+// `relief serve` against the clients a hostile probe used: clients that hang
+// up before the answer (SIGPIPE), send a byte at a time, never read, hold
+// more keep-alive connections than there are threads or more connections
+// than the limit, and a FIFO planted at a tile path. Deadlines run on an
+// injected clock that the tests move forward, so nothing waits for them.
+#include <gtest/gtest.h>
+
+#include <signal.h>
+#include <sys/socket.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <fstream>
+#include <latch>
+#include <thread>
+#include <vector>
+
+#include "http_client.h"
+#include "relief/serve/store_server.h"
+#include "relief/tiles/store_layout.h"
+#include "servers.h"
+#include "test_support.h"
+
+namespace relief::testing {
+namespace {
+namespace fs = std::filesystem;
+using namespace std::chrono_literals;
+
+// Larger than a loopback socket's send and receive buffers together, so the
+// server is still writing when a client hangs up or stops reading.
+constexpr size_t kBigFileBytes = 16u << 20;
+
+// The server's clock: the real one plus an offset the test moves forward.
+struct MovableClock {
+  std::atomic<int64_t> offset_ms{0};
+  std::chrono::steady_clock::time_point now() const {
+    return std::chrono::steady_clock::now() + std::chrono::milliseconds(offset_ms.load());
+  }
+  void advance(std::chrono::milliseconds d) { offset_ms += d.count(); }
+};
+
+class HostileClientsTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new ScratchDir("serve_hostile");
+    root_ = dir_->path() / "store";
+    const std::string big = tiles::tile_relative_path({5, 3, 7});
+    const std::string fifo = tiles::tile_relative_path({5, 1, 1});
+    fs::create_directories((root_ / big).parent_path());
+    fs::create_directories((root_ / fifo).parent_path());
+    std::ofstream(root_ / "manifest.json") << "{}";
+    std::ofstream(root_ / big) << std::string(kBigFileBytes, 'x');
+    ASSERT_EQ(::mkfifo((root_ / fifo).c_str(), 0600), 0);
+    big_path_ = "/" + big;
+    fifo_path_ = "/" + fifo;
+  }
+  static void TearDownTestSuite() { delete dir_; }
+
+  // An in-process server on a free port with short-lived threads and
+  // deadlines far away unless the clock is moved.
+  std::unique_ptr<serve::StoreServer> start(serve::ServeOptions o = {}) {
+    o.root = root_;
+    o.port = 0;
+    o.threads = 2;
+    o.clock = [this] { return clock_.now(); };
+    auto server = serve::StoreServer::start(o);
+    EXPECT_TRUE(server) << server.error().message;
+    return std::move(*server);
+  }
+  static std::string get_request(const std::string& path) {
+    return "GET " + path + " HTTP/1.1\r\nHost: x\r\n\r\n";
+  }
+
+  static inline ScratchDir* dir_ = nullptr;
+  static inline fs::path root_;
+  static inline std::string big_path_, fifo_path_;
+  MovableClock clock_;
+};
+
+TEST_F(HostileClientsTest, ClientsHangingUpBeforeTheAnswerDoNotKillTheServer) {
+  auto server = start();
+  for (int i = 0; i < 40; ++i) {
+    const int fd = connect_client(server->port());
+    const std::string req = get_request(big_path_);
+    ::send(fd, req.data(), req.size(), MSG_NOSIGNAL);
+    ::close(fd);  // unread data: the server's next write meets a reset
+  }
+  // Still alive and serving (a SIGPIPE would have ended this process).
+  EXPECT_EQ(get(server->port(), big_path_).body.size(), kBigFileBytes);
+  EXPECT_EQ(get(server->port(), "/manifest.json").status, 200);
+}
+
+TEST_F(HostileClientsTest, SlowClientsDoNotDelayOthers) {
+  auto server = start();
+  std::vector<int> slow;
+  for (int i = 0; i < 200; ++i) {
+    slow.push_back(connect_client(server->port()));
+    ASSERT_GE(slow.back(), 0);
+    ::send(slow.back(), "GET /manifest.json HTTP/1.1\r\nHo", 31, MSG_NOSIGNAL);
+  }
+  EXPECT_EQ(get(server->port(), "/manifest.json").status, 200);
+  for (int fd : slow) ::close(fd);
+}
+
+TEST_F(HostileClientsTest, TheReadDeadlineClosesSlowAndIdleConnections) {
+  serve::ServeOptions o;
+  o.read_timeout = 1h;
+  auto server = start(o);
+  const int port = server->port();
+  // A client sending its head a byte now and then: bytes do not extend the deadline.
+  const int slow = connect_client(port);
+  ::send(slow, "G", 1, MSG_NOSIGNAL);
+  // A keep-alive connection left idle after one answer.
+  const int idle = connect_client(port);
+  const std::string req = get_request("/manifest.json");
+  ::send(idle, req.data(), req.size(), MSG_NOSIGNAL);
+  EXPECT_EQ(read_response(idle).status, 200);
+  for (int i = 0; i < 3; ++i) {
+    clock_.advance(25min);
+    ::send(slow, "E", 1, MSG_NOSIGNAL);
+  }
+  clock_.advance(25min);
+  EXPECT_TRUE(closed_by_server(slow));
+  EXPECT_TRUE(closed_by_server(idle));
+  ::close(slow);
+  ::close(idle);
+  // New connections have deadlines of their own.
+  EXPECT_EQ(get(port, "/manifest.json").status, 200);
+}
+
+TEST_F(HostileClientsTest, ClientsThatNeverReadDoNotBlockOthersAndAreDropped) {
+  serve::ServeOptions o;
+  o.write_timeout = 1h;
+  auto server = start(o);
+  std::vector<int> stuck;
+  for (int i = 0; i < 16; ++i) {
+    stuck.push_back(connect_client(server->port()));
+    const std::string req = get_request(big_path_);
+    ::send(stuck.back(), req.data(), req.size(), MSG_NOSIGNAL);
+  }
+  EXPECT_EQ(get(server->port(), "/manifest.json").status, 200);
+  // Past the write deadline they are dropped: reading now ends before the file does.
+  clock_.advance(2h);
+  for (int fd : stuck) {
+    EXPECT_TRUE(closed_by_server(fd));
+    ::close(fd);
+  }
+}
+
+TEST_F(HostileClientsTest, KeepAliveClientsBeyondTheThreadCountAreAllServed) {
+  auto server = start();
+  constexpr int kClients = 50, kRequests = 20;
+  std::atomic<int> good{0};
+  std::latch all_done(kClients);
+  std::vector<std::thread> clients;
+  for (int c = 0; c < kClients; ++c) {
+    clients.emplace_back([&] {
+      const int fd = connect_client(server->port());
+      const std::string req = get_request("/manifest.json");
+      for (int i = 0; i < kRequests; ++i) {
+        ::send(fd, req.data(), req.size(), MSG_NOSIGNAL);
+        if (read_response(fd).body != "{}") break;
+        ++good;
+      }
+      all_done.arrive_and_wait();  // every connection stays open until all are served
+      ::close(fd);
+    });
+  }
+  for (auto& t : clients) t.join();
+  EXPECT_EQ(good.load(), kClients * kRequests);
+}
+
+TEST_F(HostileClientsTest, ConnectionsBeyondTheLimitAreRefusedAtOnce) {
+  serve::ServeOptions o;
+  o.max_connections = 8;
+  auto server = start(o);
+  std::vector<int> held;
+  const std::string req = get_request("/manifest.json");
+  for (int i = 0; i < 8; ++i) {
+    held.push_back(connect_client(server->port()));
+    ::send(held.back(), req.data(), req.size(), MSG_NOSIGNAL);
+    ASSERT_EQ(read_response(held.back()).status, 200);
+  }
+  const int extra = connect_client(server->port());
+  EXPECT_EQ(read_response(extra).status, 503);
+  EXPECT_TRUE(closed_by_server(extra));
+  ::close(extra);
+  // A slot freed is a slot available again (once the server has seen the close).
+  ::close(held.back());
+  held.pop_back();
+  int status = 0;
+  for (int attempt = 0; attempt < 200 && status != 200; ++attempt) {
+    status = get(server->port(), "/manifest.json").status;
+    if (status != 200) std::this_thread::sleep_for(10ms);
+  }
+  EXPECT_EQ(status, 200);
+  for (int fd : held) ::close(fd);
+}
+
+// The `relief serve` process: a FIFO at a tile path is not a file to serve (it
+// used to block a worker in open()), and SIGTERM still stops the server.
+TEST_F(HostileClientsTest, AFifoAtATilePathIsRefusedAndSigtermStillStops) {
+  const int port = free_port();
+  const int pid = spawn_relief({"serve", root_.string(), "--port", std::to_string(port)});
+  wait_for(port);
+  EXPECT_EQ(get(port, fifo_path_).status, 404);
+  EXPECT_EQ(get(port, "/manifest.json").status, 200);
+  ::kill(pid, SIGTERM);
+  int status = -1;
+  for (int i = 0; i < 500 && ::waitpid(pid, &status, WNOHANG) == 0; ++i) {
+    std::this_thread::sleep_for(20ms);
+  }
+  if (::waitpid(pid, nullptr, WNOHANG) == 0) {
+    ::kill(pid, SIGKILL);
+    ::waitpid(pid, &status, 0);
+    FAIL() << "relief serve did not stop on SIGTERM";
+  }
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+}
+
+}  // namespace
+}  // namespace relief::testing
