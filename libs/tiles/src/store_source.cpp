@@ -80,6 +80,8 @@ uint64_t max_file_bytes(const std::string& relative, const std::optional<TileSha
     // 2^13 x 2^12 samples with a border of 2^12, the largest grid TileGrid allows.
     return max_tile_file_bytes({SampleType::Float32, 1, 16384, 12288, 4096});
   }
+  // Any other file is not one of a store's: the manifest's cap bounds it.
+  if (!relative.ends_with(kLevelIndexName)) return kMaxManifestBytes;
   // "L/index.rli": header, presence bitmap and a 16-byte record per tile.
   const int level = std::atoi(relative.c_str());
   if (level < 0 || level > 13) return kMaxLevelIndexBytes;
