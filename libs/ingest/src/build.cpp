@@ -347,7 +347,7 @@ class Builder {
         if (!core)
           error.set(core.error());
         else if (core->any_valid()) {
-          if (auto st = cores_.write(keys[i], *core); !st) error.set(st.error());
+          if (auto st = cores_.write(keys[i], std::move(*core)); !st) error.set(st.error());
         }
         std::lock_guard lock(pool_mutex);
         pool.push_back(std::move(warper));
@@ -382,8 +382,8 @@ class Builder {
           children[static_cast<size_t>(c)] = child->get();
         }
         if (!error.failed()) {
-          const tiles::Raster core = downsample(children, grid_.width(), grid_.height(), type_);
-          if (auto st = cores_.write(p, core); !st) error.set(st.error());
+          tiles::Raster core = downsample(children, grid_.width(), grid_.height(), type_);
+          if (auto st = cores_.write(p, std::move(core)); !st) error.set(st.error());
         }
       }
       progress_.advance();

@@ -16,17 +16,24 @@
 namespace relief::tiles::detail {
 namespace {
 
-void forward_float(const Raster& r, std::vector<uint8_t>& out) {
+void forward_float(const Raster& r, std::vector<uint8_t>& out, std::vector<uint8_t>& row_planes) {
   const size_t w = static_cast<size_t>(r.width()), h = static_cast<size_t>(r.height());
   const auto* in = reinterpret_cast<const uint8_t*>(r.bytes().data());
-  out.resize(w * h * 4);  // no shrink: the buffer is reused across tiles
+  out.resize(w * h * 4);  // no shrink: the buffers are reused across tiles
+  row_planes.resize(w * 4);
+  uint8_t* planes = row_planes.data();
   for (size_t j = 0; j < h; ++j) {
     const uint8_t* row = in + j * w * 4;
-    uint8_t* o = out.data() + j * w * 4;
-    for (size_t i = 0; i < w; ++i) {
-      for (size_t b = 0; b < 4; ++b) o[b * w + i] = row[i * 4 + (3 - b)];
+    // One plane at a time and the difference from a separate buffer: plain
+    // forward loops the compiler vectorises (the strided version took 6 % of a build).
+    for (size_t b = 0; b < 4; ++b) {
+      uint8_t* plane = planes + b * w;
+      const uint8_t* src = row + (3 - b);
+      for (size_t i = 0; i < w; ++i) plane[i] = src[i * 4];
     }
-    for (size_t k = w * 4 - 1; k > 0; --k) o[k] = static_cast<uint8_t>(o[k] - o[k - 1]);
+    uint8_t* o = out.data() + j * w * 4;
+    o[0] = planes[0];
+    for (size_t k = 1; k < w * 4; ++k) o[k] = static_cast<uint8_t>(planes[k] - planes[k - 1]);
   }
 }
 
@@ -83,6 +90,7 @@ struct ThreadState {
   ZSTD_CCtx* cctx = ZSTD_createCCtx();
   ZSTD_DCtx* dctx = ZSTD_createDCtx();
   std::vector<uint8_t> planes;
+  std::vector<uint8_t> row_planes;
   ~ThreadState() {
     ZSTD_freeCCtx(cctx);
     ZSTD_freeDCtx(dctx);
@@ -99,7 +107,7 @@ Result<std::vector<std::byte>> encode_zstd(const Raster& r, int level) {
   ThreadState& ts = thread_state();
   std::vector<uint8_t>& planes = ts.planes;
   if (r.type() == SampleType::Float32)
-    forward_float(r, planes);
+    forward_float(r, planes, ts.row_planes);
   else
     forward_rgba(r, planes);
   std::vector<std::byte> out(ZSTD_compressBound(planes.size()));
