@@ -327,6 +327,7 @@ class Builder {
     const auto keys = finest_tiles();
     std::mutex pool_mutex;
     std::vector<std::unique_ptr<TileWarper>> pool;  // one warper per concurrent worker
+    SharedDirectSources shared(groups_.size());     // direct-path datasets, read once
     FirstError error;
     progress_.begin(fmt::format("warp level {}", max_level_), keys.size());
     ex_.parallel_for(keys.size(), [&](size_t i) {
@@ -341,7 +342,7 @@ class Builder {
         }
         if (!warper) {
           warper = std::make_unique<TileWarper>(sources_, groups_, o_.kind, grid_, o_.warp_error,
-                                                o_.direct_resampling);
+                                                o_.direct_resampling, &shared);
         }
         auto core = warper->warp(keys[i]);
         if (!core)
