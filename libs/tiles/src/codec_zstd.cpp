@@ -122,6 +122,7 @@ struct ThreadState {
   ZSTD_DCtx* dctx = ZSTD_createDCtx();
   std::vector<uint8_t> planes;
   std::vector<uint8_t> row_planes;
+  std::vector<std::byte> compressed;
   ~ThreadState() {
     ZSTD_freeCCtx(cctx);
     ZSTD_freeDCtx(dctx);
@@ -141,12 +142,14 @@ Result<std::vector<std::byte>> encode_zstd(const Raster& r, int level) {
     forward_float(r, planes, ts.row_planes);
   else
     forward_rgba(r, planes);
-  std::vector<std::byte> out(ZSTD_compressBound(planes.size()));
+  // Compressed into the thread's buffer, then copied at its real size,
+  // instead of zero-filling a fresh vector of the worst-case size per tile.
+  std::vector<std::byte>& bound = ts.compressed;
+  bound.resize(ZSTD_compressBound(planes.size()));
   const size_t n =
-      ZSTD_compressCCtx(ts.cctx, out.data(), out.size(), planes.data(), planes.size(), level);
+      ZSTD_compressCCtx(ts.cctx, bound.data(), bound.size(), planes.data(), planes.size(), level);
   if (ZSTD_isError(n)) return fail(fmt::format("zstd: {}", ZSTD_getErrorName(n)));
-  out.resize(n);
-  return out;
+  return std::vector<std::byte>(bound.begin(), bound.begin() + static_cast<std::ptrdiff_t>(n));
 }
 
 Result<Raster> decode_zstd(std::span<const std::byte> p, SampleType t, int bands, int w, int h) {
