@@ -1,14 +1,20 @@
 // bench/render: fixed views of an elevation store rendered with the LOD mesh
 // and with the brute-force full-resolution mesh (every finest sample a
 // vertex), side by side: quads, triangles, draw calls, LOD selection CPU time
-// (cold: first frame, tiles loaded and errors measured; warm: later frames)
-// and GPU frame time (draw calls to glFinish). Medians after a warm-up.
+// (cold: first frame, tiles loaded and errors measured; warm: median of 5
+// later frames), GPU frame time (draw calls to glFinish, median of 3 after a
+// warm-up draw, for both meshes), the selection's screen-space error bound
+// (its estimate of the largest error) and the error measured on random finest
+// samples (mesh_error.h). With a second argument, the rows are also appended
+// to that file as a markdown table.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <string>
 #include <vector>
 
+#include "mesh_error.h"
 #include "relief/lod/selection.h"
 #include "relief/render/terrain_renderer.h"
 
@@ -24,11 +30,16 @@ double median(std::vector<double> v) {
 struct Measure {
   uint32_t quads = 0, draw_calls = 0;
   uint64_t triangles = 0;
-  double cold_ms = 0, warm_ms = 0, gpu_ms = 0, max_error = 0;
+  double cold_ms = 0, warm_ms = 0, gpu_ms = 0, error_bound = 0, measured_error = 0;
+  size_t error_samples = 0;  // of the measured error: finest samples compared on screen
 };
 
-Result<Measure> measure(const tiles::Store& store, const lod::View& view, int mesh_level, bool full,
-                        int runs) {
+constexpr int kWarmSelections = 5;
+constexpr int kGpuRuns = 3;
+constexpr int kErrorSamples = 20000;
+
+Result<Measure> measure(const tiles::Store& store, const lod::View& view, int mesh_level,
+                        bool full) {
   const lod::MeshTopology mesh(mesh_level);
   lod::TerrainModel terrain(&store, mesh, uint64_t{2} << 30);
   lod::SelectionOptions o;
@@ -38,19 +49,24 @@ Result<Measure> measure(const tiles::Store& store, const lod::View& view, int me
   auto first = RELIEF_TRY(lod::select_quads(view, terrain, o));
   m.cold_ms = first.stats.seconds * 1e3;
   std::vector<double> warm;
-  for (int r = 0; r < std::max(runs, 5); ++r) {
+  for (int r = 0; r < kWarmSelections; ++r) {
     auto s = RELIEF_TRY(lod::select_quads(view, terrain, o));
     warm.push_back(s.stats.seconds * 1e3);
   }
   m.warm_ms = median(warm);
   m.quads = first.stats.quads;
-  m.max_error = first.stats.max_error_pixels;
+  m.error_bound = first.stats.max_error_pixels;
+  if (!full) {
+    bench::MeshError error(terrain, first);
+    m.measured_error = RELIEF_TRY(
+        error.sampled_max(view, first, store.manifest().extent, kErrorSamples, m.error_samples));
+  }
   auto target = RELIEF_TRY(render::make_offscreen_target(view.width, view.height));
   auto renderer = RELIEF_TRY(render::TerrainRenderer::create(terrain, nullptr));
   std::vector<double> gpu;
-  for (int r = 0; r <= runs; ++r) {
+  for (int r = 0; r <= kGpuRuns; ++r) {
     auto f = RELIEF_TRY(renderer->draw(view, first, *target, {}));
-    if (r > 0) gpu.push_back(f.gpu_seconds * 1e3);  // the first uploads textures
+    if (r > 0) gpu.push_back(f.gpu_seconds * 1e3);  // the first (warm-up) uploads textures
     m.triangles = f.triangles;
     m.draw_calls = f.draw_calls;
   }
@@ -61,9 +77,14 @@ Result<Measure> measure(const tiles::Store& store, const lod::View& view, int me
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc != 2) {
-    std::fprintf(stderr, "usage: render_bench STORE\n");
+  if (argc != 2 && argc != 3) {
+    std::fprintf(stderr, "usage: render_bench STORE [MARKDOWN_ROWS_OUT]\n");
     return 2;
+  }
+  FILE* markdown = argc == 3 ? std::fopen(argv[2], "a") : nullptr;
+  if (argc == 3 && !markdown) {
+    std::fprintf(stderr, "%s: cannot open for appending\n", argv[2]);
+    return 1;
   }
   auto store = tiles::Store::open(argv[1]);
   if (!store) {
@@ -87,26 +108,44 @@ int main(int argc, char** argv) {
       {"regional oblique", lod::look_at(1.5, 42.5, 1500, 60000, 20, -35, 60, 1280, 720)},
       {"low flight to the horizon", {1.05, 42.05, 2300, 35, -4, 0, 60, 1280, 720}},
   };
-  std::printf("%-27s %-6s %8s %11s %6s %10s %10s %9s %8s\n", "view", "mesh", "quads", "triangles",
-              "draws", "select ms", "(cold ms)", "gpu ms", "err px");
+  std::printf("%-27s %-6s %8s %11s %6s %10s %10s %9s %8s %11s\n", "view", "mesh", "quads",
+              "triangles", "draws", "select ms", "(cold ms)", "gpu ms", "bound px", "measured px");
   for (const ViewCase& v : views) {
     auto view = lod::make_view(v.camera);
-    if (!view) return 1;
-    auto lod_m = measure(*store, *view, 4, false, 3);
-    auto full_m = measure(*store, *view, 8, true, 1);
+    if (!view) {
+      std::fprintf(stderr, "%s: %s\n", v.name, view.error().message.c_str());
+      return 1;
+    }
+    auto lod_m = measure(*store, *view, 4, false);
+    auto full_m = measure(*store, *view, 8, true);
     if (!lod_m || !full_m) {
       std::fprintf(stderr, "%s\n", (!lod_m ? lod_m.error() : full_m.error()).message.c_str());
       return 1;
     }
     for (const auto& [label, m] : {std::pair{"LOD", *lod_m}, std::pair{"full", *full_m}}) {
-      std::printf("%-27s %-6s %8u %11llu %6u %10.2f %10.1f %9.1f %8.2f\n", v.name, label, m.quads,
-                  static_cast<unsigned long long>(m.triangles), m.draw_calls, m.warm_ms, m.cold_ms,
-                  m.gpu_ms, m.max_error);
+      std::printf("%-27s %-6s %8u %11llu %6u %10.2f %10.1f %9.1f %8.2f %11.2f\n", v.name, label,
+                  m.quads, static_cast<unsigned long long>(m.triangles), m.draw_calls, m.warm_ms,
+                  m.cold_ms, m.gpu_ms, m.error_bound, m.measured_error);
+    }
+    if (markdown) {
+      std::fprintf(markdown,
+                   "| %s | LOD | %u | %llu | %u | %.2f ms | %.1f ms | %.1f ms | %.2f px | %.2f px "
+                   "(%zu samples) |\n",
+                   v.name, lod_m->quads, static_cast<unsigned long long>(lod_m->triangles),
+                   lod_m->draw_calls, lod_m->warm_ms, lod_m->cold_ms, lod_m->gpu_ms,
+                   lod_m->error_bound, lod_m->measured_error, lod_m->error_samples);
+      std::fprintf(markdown, "| | brute force | %u | %llu | %u | | | %.1f ms | | |\n",
+                   full_m->quads, static_cast<unsigned long long>(full_m->triangles),
+                   full_m->draw_calls, full_m->gpu_ms);
     }
     std::printf("%-27s ratio: %.1fx fewer triangles, %.1fx less GPU time\n", v.name,
                 static_cast<double>(full_m->triangles) /
                     static_cast<double>(std::max<uint64_t>(1, lod_m->triangles)),
                 full_m->gpu_ms / std::max(1e-9, lod_m->gpu_ms));
+  }
+  if (markdown && std::fclose(markdown) != 0) {
+    std::fprintf(stderr, "%s: write failed\n", argv[2]);
+    return 1;
   }
   return 0;
 }

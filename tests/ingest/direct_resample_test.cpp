@@ -3,9 +3,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <thread>
 
 #include "../support/test_support.h"
 #include "built_stores.h"
+#include "gdal_env.h"
+#include "warp.h"
 
 namespace relief::testing {
 namespace {
@@ -57,6 +61,51 @@ TEST(DirectResampling, VoidsEdgesAndOddScalesMatchGdalWarper) {
   o.direct_resampling = true;
   const auto& direct = built_store("n42_direct_l11", o);
   expect_same_stores(direct, gdal);
+}
+
+// Workers sharing the build's direct-path datasets (reads serialised, each
+// block read once) resample exactly as a warper with datasets of its own.
+TEST(DirectResampling, WarpersSharingDatasetsAcrossThreadsMatchAPrivateWarper) {
+  ingest::init_gdal();
+  std::vector<ingest::Source> sources;
+  for (const auto& path : pyrenees_inputs()) {
+    auto s = ingest::describe_source(path, tiles::DatasetKind::Elevation, std::nullopt);
+    ASSERT_TRUE(s) << s.error().message;
+    sources.push_back(*s);
+  }
+  const auto groups = ingest::group_sources(sources);
+  const auto grid = geo::TileGrid::create();
+  ASSERT_TRUE(grid);
+  const int level = 10;
+  std::vector<geo::TileKey> keys;  // a 4 x 4 block across the seam of the two inputs
+  const uint32_t x0 = 515, y0 = 271;
+  for (uint32_t y = y0; y < y0 + 4; ++y) {
+    for (uint32_t x = x0; x < x0 + 4; ++x) keys.push_back({level, x, y});
+  }
+  ingest::TileWarper own(sources, groups, tiles::DatasetKind::Elevation, *grid, 0.125, true);
+  ingest::SharedDirectSources shared(groups.size());
+  std::vector<std::optional<Result<tiles::Raster>>> got(keys.size());
+  std::vector<std::thread> workers;
+  for (int t = 0; t < 2; ++t) {
+    workers.emplace_back([&, t] {
+      ingest::TileWarper w(sources, groups, tiles::DatasetKind::Elevation, *grid, 0.125, true,
+                           &shared);
+      for (size_t i = static_cast<size_t>(t); i < keys.size(); i += 2) got[i] = w.warp(keys[i]);
+    });
+  }
+  for (auto& w : workers) w.join();
+  size_t valid = 0;
+  for (size_t i = 0; i < keys.size(); ++i) {
+    auto expected = own.warp(keys[i]);
+    ASSERT_TRUE(expected) << expected.error().message;
+    ASSERT_TRUE(*got[i]) << got[i]->error().message;
+    const tiles::Raster& a = **got[i];
+    ASSERT_EQ(a.byte_size(), expected->byte_size());
+    EXPECT_EQ(std::memcmp(a.bytes().data(), expected->bytes().data(), a.byte_size()), 0)
+        << keys[i].to_string();
+    valid += a.stats(0, 0, a.width(), a.height()).valid_count;
+  }
+  EXPECT_GT(valid, 1000000u);  // most of the block lies inside the data
 }
 
 }  // namespace

@@ -394,6 +394,7 @@ class Builder {
     const auto keys = finest_tiles();
     std::mutex pool_mutex;
     std::vector<std::unique_ptr<TileWarper>> pool;  // one warper per concurrent worker
+    SharedDirectSources shared(groups_.size());     // direct-path datasets, read once
     FirstError error;
     progress_.begin(fmt::format("warp level {}", max_level_), keys.size());
     ex_.parallel_for(keys.size(), [&](size_t i) {
@@ -408,14 +409,14 @@ class Builder {
         }
         if (!warper) {
           warper = std::make_unique<TileWarper>(sources_, groups_, o_.kind, grid_, o_.warp_error,
-                                                o_.direct_resampling);
+                                                o_.direct_resampling, &shared);
         }
         auto core = warper->warp(keys[i]);
         if (core) drop_non_finite(*core);
         if (!core)
           error.set(core.error());
         else if (core->any_valid()) {
-          if (auto st = cores_.write(keys[i], *core); !st) error.set(st.error());
+          if (auto st = cores_.write(keys[i], std::move(*core)); !st) error.set(st.error());
         }
         std::lock_guard lock(pool_mutex);
         pool.push_back(std::move(warper));
@@ -450,8 +451,8 @@ class Builder {
           children[static_cast<size_t>(c)] = child->get();
         }
         if (!error.failed()) {
-          const tiles::Raster core = downsample(children, grid_.width(), grid_.height(), type_);
-          if (auto st = cores_.write(p, core); !st) error.set(st.error());
+          tiles::Raster core = downsample(children, grid_.width(), grid_.height(), type_);
+          if (auto st = cores_.write(p, std::move(core)); !st) error.set(st.error());
         }
       }
       progress_.advance();

@@ -25,11 +25,15 @@ bool CoreStore::exists(const geo::TileKey& key) const {
   return fs::exists(path_of(key), ec);
 }
 
-Status CoreStore::write(const geo::TileKey& key, const tiles::Raster& core) {
+Status CoreStore::write(const geo::TileKey& key, tiles::Raster core) {
   // Scratch data favours speed: the lowest zstd level.
   auto bytes = tiles::encode_tile(core, 0, {tiles::Codec::Zstd, 0, 0, 1});
   if (!bytes) return std::unexpected(bytes.error());
-  return write_file_atomic(path_of(key), *bytes);
+  RELIEF_CHECK(write_file_atomic(path_of(key), *bytes));
+  // Cached once on disk: the next phase takes it from memory instead of
+  // reading the file back and decoding it.
+  cache_.put(key, std::make_shared<const tiles::Raster>(std::move(core)));
+  return {};
 }
 
 Result<std::shared_ptr<const tiles::Raster>> CoreStore::read(const geo::TileKey& key) {

@@ -1,8 +1,9 @@
 #pragma once
 // Scratch storage for tile interiors ("cores") during a build. Cores of every
 // level are written once (atomically, so a killed build resumes from them),
-// then read back through a byte-budgeted LRU cache to assemble bordered tiles
-// and parents. Lives in <store>/.build/cores and is deleted when the build ends.
+// and kept in a byte-budgeted LRU cache from which parents and bordered tiles
+// are assembled: a core still cached is never read back from disk. Lives in
+// <store>/.build/cores and is deleted when the build ends.
 #include <filesystem>
 #include <memory>
 #include <optional>
@@ -22,7 +23,7 @@ class CoreStore {
   CoreStore(std::filesystem::path dir, tiles::TileShape shape, uint64_t cache_budget_bytes);
 
   bool exists(const geo::TileKey& key) const;
-  Status write(const geo::TileKey& key, const tiles::Raster& core);
+  Status write(const geo::TileKey& key, tiles::Raster core);
   // nullptr when the core does not exist (an empty tile).
   Result<std::shared_ptr<const tiles::Raster>> read(const geo::TileKey& key);
   // Every core written so far at `level`, sorted by (y, x).

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <mutex>
 #include <vector>
 
 #include <fmt/format.h>
@@ -88,10 +89,15 @@ Status DirectResampler::resample(const geo::TileGrid& grid, const geo::TileKey& 
   const int y0 = std::max(0, rows.front().index), y1 = std::min(height_ - 1, rows.back().index + 1);
   if (x0 > x1 || y0 > y1) return {};
   const int ww = x1 - x0 + 1, wh = y1 - y0 + 1;
-  std::vector<double> src(static_cast<size_t>(ww) * static_cast<size_t>(wh));
-  if (GDALRasterIO(GDALGetRasterBand(ds_, 1), GF_Read, x0, y0, ww, wh, src.data(), ww, wh,
-                   GDT_Float64, 0, 0) != CE_None) {
-    return fail(fmt::format("tile {}: {}", key.to_string(), gdal_error("source read failed")));
+  thread_local std::vector<double> src;  // reused: no fresh pages per tile
+  src.resize(static_cast<size_t>(ww) * static_cast<size_t>(wh));
+  {
+    std::unique_lock<std::mutex> lock;
+    if (read_mutex_) lock = std::unique_lock(*read_mutex_);
+    if (GDALRasterIO(GDALGetRasterBand(ds_, 1), GF_Read, x0, y0, ww, wh, src.data(), ww, wh,
+                     GDT_Float64, 0, 0) != CE_None) {
+      return fail(fmt::format("tile {}: {}", key.to_string(), gdal_error("source read failed")));
+    }
   }
   // Valid and inside the raster; outside the window means outside the raster.
   auto sample = [&](int x, int y, double& v) {
@@ -121,6 +127,23 @@ Status DirectResampler::resample(const geo::TileGrid& grid, const geo::TileKey& 
     }
   }
   return {};
+}
+
+SharedDirectSources::SharedDirectSources(size_t groups) {
+  for (size_t g = 0; g < groups; ++g) slots_.push_back(std::make_unique<Slot>());
+}
+
+const DirectResampler* SharedDirectSources::get(size_t g, double destination_spacing,
+                                                const std::function<Result<Dataset>()>& open) {
+  Slot& slot = *slots_.at(g);
+  std::call_once(slot.once, [&] {
+    auto ds = open();
+    if (!ds || !*ds) return;  // the per-worker path reports the error
+    slot.ds = std::move(*ds);
+    slot.resampler = DirectResampler::create(slot.ds.get(), destination_spacing);
+    if (slot.resampler) slot.resampler->serialise_reads(&slot.reads);
+  });
+  return slot.resampler ? &*slot.resampler : nullptr;
 }
 
 }  // namespace relief::ingest

@@ -8,7 +8,11 @@
 // the raster whose own source pixel is valid; weights of valid neighbours
 // renormalised, invalid below a total weight of 1e-5; the same accumulation
 // order), so the result equals GDAL's warper's to the last bit or two.
+#include <functional>
+#include <memory>
+#include <mutex>
 #include <optional>
+#include <vector>
 
 #include "gdal_env.h"
 #include "relief/base/result.h"
@@ -28,12 +32,38 @@ class DirectResampler {
   // of `key`), leaving the others untouched, as GDAL mosaics sources.
   Status resample(const geo::TileGrid& grid, const geo::TileKey& key, tiles::Raster& tile) const;
 
+  // Source reads take this lock (for a dataset shared between threads).
+  void serialise_reads(std::mutex* m) { read_mutex_ = m; }
+
  private:
   GDALDatasetH ds_ = nullptr;
+  std::mutex* read_mutex_ = nullptr;
   double gt_[6] = {};
   int width_ = 0, height_ = 0;
   bool has_nodata_ = false;
   double nodata_ = 0;
+};
+
+// Direct resamplers shared by every worker of a build: one GDAL dataset per
+// mosaic group, so each source block is read (an .hgt.zip inflated) once per
+// build instead of once per worker, in GDAL's block cache. Reads of a group
+// are serialised; the resampling runs in parallel. Thread-safe.
+class SharedDirectSources {
+ public:
+  explicit SharedDirectSources(size_t groups);
+  // Group g's resampler, its dataset opened by `open` on first use; nullptr
+  // when the group does not qualify or cannot be opened.
+  const DirectResampler* get(size_t g, double destination_spacing,
+                             const std::function<Result<Dataset>()>& open);
+
+ private:
+  struct Slot {
+    std::once_flag once;
+    Dataset ds;
+    std::optional<DirectResampler> resampler;
+    std::mutex reads;
+  };
+  std::vector<std::unique_ptr<Slot>> slots_;
 };
 
 }  // namespace relief::ingest

@@ -57,18 +57,22 @@ std::vector<MosaicGroup> group_sources(const std::vector<Source>& sources) {
 
 TileWarper::TileWarper(const std::vector<Source>& sources, const std::vector<MosaicGroup>& groups,
                        tiles::DatasetKind kind, geo::TileGrid grid, double error_threshold,
-                       bool direct)
+                       bool direct, SharedDirectSources* shared)
     : sources_(sources),
       groups_(groups),
       kind_(kind),
       grid_(grid),
       error_threshold_(error_threshold),
       direct_(direct && kind != tiles::DatasetKind::Imagery),
+      shared_(shared),
       open_(groups.size()),
       direct_resamplers_(groups.size()) {}
 
 const DirectResampler* TileWarper::direct_for(size_t g, int level) {
   if (!direct_) return nullptr;
+  if (shared_) {
+    return shared_->get(g, grid_.sample_spacing(level), [&] { return open_group(g); });
+  }
   auto& slot = direct_resamplers_[g];
   if (!slot) {
     auto handle = group_handle(g);
@@ -81,7 +85,7 @@ const DirectResampler* TileWarper::direct_for(size_t g, int level) {
 Result<tiles::Raster> TileWarper::warp_direct(const geo::TileKey& key,
                                               const std::vector<size_t>& groups) {
   tiles::Raster r = tiles::Raster::empty(tiles::SampleType::Float32, grid_.width(), grid_.height());
-  for (size_t g : groups) RELIEF_CHECK(direct_resamplers_[g].value()->resample(grid_, key, r));
+  for (size_t g : groups) RELIEF_CHECK(direct_for(g, key.level)->resample(grid_, key, r));
   return r;
 }
 
@@ -98,7 +102,11 @@ std::vector<size_t> TileWarper::groups_for(const geo::TileKey& key) const {
 }
 
 Result<GDALDatasetH> TileWarper::group_handle(size_t g) {
-  if (open_[g]) return open_[g].get();
+  if (!open_[g]) open_[g] = RELIEF_TRY(open_group(g));
+  return open_[g].get();
+}
+
+Result<Dataset> TileWarper::open_group(size_t g) const {
   const MosaicGroup& group = groups_[g];
   const Source& first = sources_[group.members.front()];
   Dataset ds;
@@ -132,8 +140,7 @@ Result<GDALDatasetH> TileWarper::group_handle(size_t g) {
   if (!ds) return fail(fmt::format("{}: {}", first.path, gdal_error("cannot open for reading")));
   // --src-crs may have supplied a CRS the file lacks.
   if (!first.crs_wkt.empty()) GDALSetProjection(ds.get(), first.crs_wkt.c_str());
-  open_[g] = std::move(ds);
-  return open_[g].get();
+  return ds;
 }
 
 Result<tiles::Raster> TileWarper::warp(const geo::TileKey& key) {

@@ -1,7 +1,8 @@
 #pragma once
 // Resamples the sources onto the interior samples of one finest-level tile,
 // through GDAL's warper. Not thread-safe: each worker owns a TileWarper, which
-// opens its own GDAL datasets (GDAL datasets must not be shared by threads).
+// opens its own GDAL datasets (GDAL datasets must not be shared by threads),
+// except for the direct path's, shared through SharedDirectSources.
 //
 // Sources that share a CRS and have north-up geotransforms are first mosaicked
 // on their native grid (a VRT, later inputs on top), so bilinear interpolation
@@ -34,8 +35,10 @@ class TileWarper {
   // error_threshold: largest error in source pixels of GDAL's approximate
   // transformer (0 = transform every sample exactly), as gdalwarp -et.
   // direct: use DirectResampler where a group qualifies (same result, faster).
+  // shared: the build's shared direct resamplers (nullptr: this warper's own).
   TileWarper(const std::vector<Source>& sources, const std::vector<MosaicGroup>& groups,
-             tiles::DatasetKind kind, geo::TileGrid grid, double error_threshold, bool direct);
+             tiles::DatasetKind kind, geo::TileGrid grid, double error_threshold, bool direct,
+             SharedDirectSources* shared = nullptr);
 
   // The tile's interior (no border). A tile no source covers comes back empty
   // (all nodata), which callers check with stats().valid_count.
@@ -44,6 +47,7 @@ class TileWarper {
  private:
   std::vector<size_t> groups_for(const geo::TileKey& key) const;
   Result<GDALDatasetH> group_handle(size_t g);
+  Result<Dataset> open_group(size_t g) const;
   // The direct resampler of group g, if it qualifies (decided on first use).
   const DirectResampler* direct_for(size_t g, int level);
   Result<tiles::Raster> warp_direct(const geo::TileKey& key, const std::vector<size_t>& groups);
@@ -54,6 +58,7 @@ class TileWarper {
   geo::TileGrid grid_;
   double error_threshold_;
   bool direct_;
+  SharedDirectSources* shared_;
   std::vector<Dataset> open_;  // per group, opened on first use
   std::vector<std::optional<std::optional<DirectResampler>>> direct_resamplers_;  // per group
 };
