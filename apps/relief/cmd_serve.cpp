@@ -12,22 +12,39 @@ namespace relief::cli {
 namespace {
 constexpr const char* kHelp =
     R"(usage: relief serve STORE [--port P] [--bind ADDR] [--threads N]
+                    [--max-connections N] [--read-timeout S] [--write-timeout S]
 
 Serves a store read-only over HTTP/1.1 until interrupted: only the store's own
 files (manifest.json, level indices, tiles) by their canonical paths, GET and
-HEAD, keep-alive, Content-Length, ETag with If-None-Match, cache headers.
+HEAD, keep-alive, Content-Length, ETag with If-None-Match, single byte
+ranges, cache headers. Slow or idle clients cannot starve the others: each
+connection has read and write deadlines.
 Any static web server (nginx, ...) serving the store directory works the same.
 
 options:
   --port P       TCP port (default 8080; 0: any free port, printed)
   --bind ADDR    IPv4 address to listen on (default 127.0.0.1)
-  --threads N    connections served at once (default 16)
+  --threads N    event-loop threads, each serving any number of connections
+                 (default 16)
+  --max-connections N  connections open at once; more get 503 (default 1024,
+                 lowered to fit the file-descriptor limit)
+  --read-timeout S     a request head must arrive whole within S seconds of
+                 the connection opening or the previous answer (default 10)
+  --write-timeout S    an answer making no progress for S seconds is dropped
+                 (default 10)
 )";
 }  // namespace
 
 int run_serve(const std::vector<std::string>& argv) {
   if (wants_help(argv)) return print_help(kHelp);
-  auto args = Args::parse(argv, {{"--port"}, {"--bind"}, {"--threads"}}, "serve");
+  auto args = Args::parse(argv,
+                          {{"--port"},
+                           {"--bind"},
+                           {"--threads"},
+                           {"--max-connections"},
+                           {"--read-timeout"},
+                           {"--write-timeout"}},
+                          "serve");
   if (!args) return report_error(args.error().message);
   if (args->positional().size() != 1) return report_error("serve: expected exactly one STORE");
   serve::ServeOptions o;
@@ -39,6 +56,20 @@ int run_serve(const std::vector<std::string>& argv) {
   auto threads = args->get_int("--threads", 1, 1024);
   if (!threads) return report_error(threads.error().message);
   o.threads = threads->value_or(16);
+  auto connections = args->get_int("--max-connections", 1, 1 << 20);
+  if (!connections) return report_error(connections.error().message);
+  o.max_connections = connections->value_or(o.max_connections);
+  for (auto [name, timeout] : {std::pair{"--read-timeout", &o.read_timeout},
+                               std::pair{"--write-timeout", &o.write_timeout}}) {
+    auto seconds = args->get_double(name);
+    if (!seconds) return report_error(seconds.error().message);
+    if (!*seconds) continue;
+    if (!(**seconds >= 0.001 && **seconds <= 86400)) {
+      return report_error(
+          fmt::format("serve: {} {}: expected seconds in [0.001, 86400]", name, **seconds));
+    }
+    *timeout = std::chrono::milliseconds(static_cast<int64_t>(**seconds * 1000));
+  }
   // Block the stop signals before the server's threads start, so only the
   // main thread receives them (sigwait below).
   sigset_t stop_signals;

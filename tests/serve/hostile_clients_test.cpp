@@ -221,5 +221,29 @@ TEST_F(HostileClientsTest, AFifoAtATilePathIsRefusedAndSigtermStillStops) {
   EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
 }
 
+// The deadlines and the connection limit are the user's to set: a short read
+// deadline closes an idle connection of the `relief serve` process, and
+// impossible values are one-line errors naming the option.
+TEST_F(HostileClientsTest, DeadlinesAndTheLimitAreCommandLineOptions) {
+  for (const auto& [option, value] :
+       {std::pair{"--read-timeout", "0"}, std::pair{"--write-timeout", "-1"},
+        std::pair{"--read-timeout", "nan"}, std::pair{"--max-connections", "0"}}) {
+    const RunResult r = run_relief({"serve", root_.string(), "--port", "0", option, value});
+    EXPECT_NE(r.exit_code, 0) << option << " " << value;
+    EXPECT_NE(r.err.find(option), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find('\n'), r.err.size() - 1) << r.err;
+  }
+  const int port = free_port();
+  const int pid = spawn_relief({"serve", root_.string(), "--port", std::to_string(port),
+                                "--read-timeout", "0.2", "--max-connections", "8"});
+  wait_for(port);
+  const int idle = connect_client(port);
+  EXPECT_TRUE(closed_by_server(idle));  // after 0.2 s, long before the client's own 5 s
+  ::close(idle);
+  EXPECT_EQ(get(port, "/manifest.json").status, 200);
+  ::kill(pid, SIGTERM);
+  ::waitpid(pid, nullptr, 0);
+}
+
 }  // namespace
 }  // namespace relief::testing
