@@ -40,7 +40,9 @@ int connect_to(int port) {
 }
 
 void wait_for(int port) {
-  for (int i = 0; i < 200; ++i) {
+  // A safety bound only (60 s): a loaded machine (sanitizers, 2 cores) may take
+  // seconds to start a server; a server that never listens still fails.
+  for (int i = 0; i < 3000; ++i) {
     const int fd = connect_to(port);
     if (fd >= 0) {
       ::close(fd);
