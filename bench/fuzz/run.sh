@@ -16,6 +16,10 @@ targets=("$@")
 out=${OUT:-/tmp/relief-fuzz}
 build=${BUILD_DIR:-build-fuzz}
 mkdir -p "$out"
+# Sanitizer reports with file:line when an llvm-symbolizer is installed.
+if [[ -z ${ASAN_SYMBOLIZER_PATH:-} ]] && command -v llvm-symbolizer >/dev/null; then
+  export ASAN_SYMBOLIZER_PATH=$(command -v llvm-symbolizer)
+fi
 
 cmake -S . -B "$build" -G Ninja -DCMAKE_CXX_COMPILER="${CXX:-clang++-19}" -DRELIEF_FUZZ=ON \
   -DRELIEF_BUILD_TESTS=OFF >/dev/null
