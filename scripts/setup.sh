@@ -9,6 +9,7 @@ packages=(
   libzstd-dev liblerc-dev libpng-dev libturbojpeg0-dev libwebp-dev
   nlohmann-json3-dev libfmt-dev libgtest-dev
   otb-bin
+  clang-19 libclang-rt-19-dev  # fuzz/: libFuzzer (clang >= 16 compiles <expected>)
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -5,6 +5,9 @@
 #include <cmath>
 #include <filesystem>
 
+#include <string>
+#include <utility>
+#include <vector>
 #include "relief/tiles/store.h"
 #include "relief/tiles/store_layout.h"
 
@@ -67,6 +70,43 @@ TEST(Manifest, NonFiniteValuesAreNeverWritten) {
   }
   EXPECT_TRUE(fs::is_empty(dir));  // no temporary left either
   fs::remove_all(dir);
+}
+
+// Numbers that do not fit their field are errors, not undefined behaviour:
+// nlohmann's get<int>() of 1e300 is a bare static_cast, and a tile height
+// above 2^30 made the power-of-two search shift by 32 (UBSan under
+// fuzz/manifest.cpp; the inputs are in fuzz/regressions/manifest/).
+TEST(Manifest, NumbersOutOfRangeAreErrors) {
+  const std::string good = Manifest{}.to_json();
+  ASSERT_TRUE(Manifest::from_json(good, "m"));
+  auto with = [&good](const std::string& from, const std::string& to) {
+    std::string text = good;
+    const size_t at = text.find(from);
+    EXPECT_NE(at, std::string::npos) << from;
+    return text.replace(at, from.size(), to);
+  };
+  for (const auto& [from, to] : std::vector<std::pair<std::string, std::string>>{
+           {"\"bands\": 1,", "\"bands\": 1e300,"},
+           {"\"bands\": 1,", "\"bands\": 1.5,"},
+           {"\"bands\": 1,", "\"bands\": 4294967297,"},
+           {"\"height\": 256,", "\"height\": 1073741825,"},
+           {"\"height\": 256,", "\"height\": 1073741824,"},
+           {"\"width\": 512", "\"width\": 2147483648"},
+           {"\"border\": 9,", "\"border\": 2147483647,"},
+           {"\"border\": 9,", "\"border\": -1,"},
+           {"\"max\": 0,", "\"max\": 1e10,"},
+           {"\"valid_samples\": 0", "\"valid_samples\": -1"},
+           {"\"quality\": 90", "\"quality\": 9e99"}}) {
+    auto m = Manifest::from_json(with(from, to), "store/manifest.json");
+    EXPECT_FALSE(m) << to;
+    if (!m) {
+      EXPECT_NE(m.error().message.find("store/manifest.json"), std::string::npos);
+    }
+  }
+  // The largest tile a tile file can hold still reads.
+  std::string largest = with("\"height\": 256,", "\"height\": 16384,");
+  largest.replace(largest.find("\"width\": 512"), 13, "\"width\": 32768");
+  EXPECT_TRUE(Manifest::from_json(largest, "m"));
 }
 
 }  // namespace relief::tiles

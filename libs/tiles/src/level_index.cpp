@@ -123,7 +123,12 @@ Result<LevelIndex> LevelIndex::parse(std::span<const std::byte> b, const std::st
   const auto cols = read_at<uint32_t>(b, 20), rows = read_at<uint32_t>(b, 24);
   const auto count = read_at<uint64_t>(b, 28);
   const uint64_t bitmap_bytes = (static_cast<uint64_t>(cols) * rows + 7) / 8;
-  if (level > geo::kMaxLevel || kFixedHeader + bitmap_bytes + count * kRecordSize + 4 != b.size()) {
+  // Each part is bounded by the room it has before they are added: a forged
+  // count could otherwise wrap the sum around to the file's size, and the
+  // bitmap loop below would read far past the end.
+  const uint64_t room = b.size() - kFixedHeader - 4;
+  if (level > geo::kMaxLevel || bitmap_bytes > room ||
+      count > (room - bitmap_bytes) / kRecordSize || bitmap_bytes + count * kRecordSize != room) {
     return fail(fmt::format("{}: level index is truncated or inconsistent", name));
   }
   LevelIndex index(level);

@@ -1,11 +1,35 @@
 #include "relief/tiles/manifest.h"
 
+#include <cstdint>
+#include <limits>
+#include <stdexcept>
+#include <utility>
+
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 namespace relief::tiles {
 
 using nlohmann::json;
+
+namespace {
+
+// nlohmann's get<int>() converts a float or an out-of-range integer with a bare
+// static_cast, which is undefined behaviour (UBSan under fuzz/manifest.cpp on
+// "bands": 1e300): integer fields must hold an integer that fits.
+template <class T>
+T integer_at(const json& j, const char* key) {
+  const json& v = j.at(key);
+  if (v.is_number_unsigned() && std::in_range<T>(v.get<uint64_t>())) return v.get<T>();
+  if (v.is_number_integer() && !v.is_number_unsigned() && std::in_range<T>(v.get<int64_t>())) {
+    return v.get<T>();
+  }
+  throw std::out_of_range(fmt::format("'{}' must be an integer in [{}, {}], not {}", key,
+                                      std::numeric_limits<T>::min(), std::numeric_limits<T>::max(),
+                                      v.dump()));
+}
+
+}  // namespace
 
 std::string_view to_string(DatasetKind k) {
   switch (k) {
@@ -76,7 +100,7 @@ Result<Manifest> Manifest::from_json(const std::string& text, const std::string&
       return fail(fmt::format("{}: not a relief store manifest", name));
     }
     Manifest m;
-    m.format_version = j.at("format_version").get<int>();
+    m.format_version = integer_at<int>(j, "format_version");
     if (m.format_version != kStoreFormatVersion) {
       return fail(fmt::format("{}: unsupported store format version {}", name, m.format_version));
     }
@@ -86,18 +110,22 @@ Result<Manifest> Manifest::from_json(const std::string& text, const std::string&
     auto type = sample_type_from_string(j.at("sample_type").get<std::string>());
     if (!type) return fail(fmt::format("{}: {}", name, type.error().message));
     m.sample_type = *type;
-    m.bands = j.at("bands").get<int>();
+    m.bands = integer_at<int>(j, "bands");
     m.units = j.at("units").get<std::string>();
-    const int height = j.at("tile").at("height").get<int>();
+    // A tile file stores its bordered width in 16 bits: 2^(k+1) + 2 border <= 65535.
+    const int height = integer_at<int>(j.at("tile"), "height");
+    m.border = integer_at<int>(j.at("tile"), "border");
     int log2 = 0;
-    while ((1 << log2) < height) ++log2;
-    if ((1 << log2) != height || j.at("tile").at("width").get<int>() != 2 * height) {
-      return fail(fmt::format("{}: tile size must be 2^(k+1) x 2^k", name));
+    while (log2 < 14 && (1 << log2) < height) ++log2;
+    if ((1 << log2) != height || integer_at<int>(j.at("tile"), "width") != 2 * height) {
+      return fail(fmt::format("{}: tile size must be 2^(k+1) x 2^k, k <= 14", name));
+    }
+    if (m.border < 0 || m.border > (65535 - 2 * height) / 2) {
+      return fail(fmt::format("{}: bad tile border {}", name, m.border));
     }
     m.tile_log2_height = log2;
-    m.border = j.at("tile").at("border").get<int>();
-    m.min_level = j.at("levels").at("min").get<int>();
-    m.max_level = j.at("levels").at("max").get<int>();
+    m.min_level = integer_at<int>(j.at("levels"), "min");
+    m.max_level = integer_at<int>(j.at("levels"), "max");
     if (m.min_level < 0 || m.max_level > geo::kMaxLevel || m.min_level > m.max_level) {
       return fail(fmt::format("{}: bad level range", name));
     }
@@ -106,21 +134,24 @@ Result<Manifest> Manifest::from_json(const std::string& text, const std::string&
                 e.at("north").get<double>()};
     const auto& s = j.at("statistics");
     m.stats = {s.at("min").get<double>(), s.at("max").get<double>(), s.at("mean").get<double>(),
-               s.at("std").get<double>(), s.at("valid_samples").get<uint64_t>()};
+               s.at("std").get<double>(), integer_at<uint64_t>(s, "valid_samples")};
     auto codec = codec_from_string(j.at("codec").at("name").get<std::string>());
     if (!codec) return fail(fmt::format("{}: {}", name, codec.error().message));
     m.codec.codec = *codec;
     m.codec.max_error = j.at("codec").at("max_error").get<double>();
-    m.codec.quality = j.at("codec").value("quality", 90);
+    m.codec.quality =
+        j.at("codec").contains("quality") ? integer_at<int>(j.at("codec"), "quality") : 90;
     for (const auto& src : j.at("sources")) {
       m.sources.push_back({src.at("path").get<std::string>(), src.at("crs").get<std::string>(),
-                           src.at("width").get<int>(), src.at("height").get<int>(),
-                           src.at("bands").get<int>(), src.at("data_type").get<std::string>()});
+                           integer_at<int>(src, "width"), integer_at<int>(src, "height"),
+                           integer_at<int>(src, "bands"), src.at("data_type").get<std::string>()});
     }
     m.created_by = j.value("created_by", "");
     RELIEF_CHECK(check_consistency(m, name));
     return m;
   } catch (const json::exception& ex) {
+    return fail(fmt::format("{}: invalid manifest: {}", name, ex.what()));
+  } catch (const std::out_of_range& ex) {
     return fail(fmt::format("{}: invalid manifest: {}", name, ex.what()));
   }
 }
