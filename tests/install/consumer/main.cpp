@@ -32,7 +32,8 @@ int main(int argc, char** argv) {
                                       tile->raster.width(), tile->raster.height());
     if (!back) return fail(back.error().message);
   }
-  const double lon = (m.extent.west + m.extent.east) / 2, lat = (m.extent.south + m.extent.north) / 2;
+  const double lon = (m.extent.west + m.extent.east) / 2,
+               lat = (m.extent.south + m.extent.north) / 2;
   auto value = store->sample(lon, lat, m.max_level);
   if (!value) return fail(value.error().message);
   if (!*value || !(**value >= m.stats.min && **value <= m.stats.max)) {
