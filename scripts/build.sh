@@ -1,5 +1,7 @@
 #!/usr/bin/env bash
-# Configures and builds relief into build/ (or $RELIEF_BUILD_DIR).
+# Configures and builds relief into build/ (or $RELIEF_BUILD_DIR). Extra
+# arguments go to cmake's configure step, e.g. -DRELIEF_WERROR=ON to make
+# warnings errors as the presets and CI do (docs/building.md).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD_DIR=${RELIEF_BUILD_DIR:-build}

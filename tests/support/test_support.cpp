@@ -71,7 +71,9 @@ RunResult run_relief(const std::vector<std::string>& args, const std::string& sh
   const fs::path base = fs::temp_directory_path() / ("relief_run_" + std::to_string(::getpid()) +
                                                      "_" + std::to_string(counter++));
   std::string cmd = shell_prefix + " " + quote(RELIEF_BINARY);
-  for (const auto& a : args) cmd += " " + quote(a);
+  // Appended, not `" " + quote(a)`: gcc 12 -O3 reports a false -Wrestrict on
+  // `const char* + std::string&&`.
+  for (const auto& a : args) cmd.append(" ").append(quote(a));
   cmd +=
       " >" + quote(base.string() + ".out") + " 2>" + quote(base.string() + ".err") + " </dev/null";
   const int status = std::system(("bash -c " + quote(cmd)).c_str());
