@@ -18,6 +18,7 @@
 #include <sstream>
 #include <thread>
 
+#include "http_client.h"
 #include "relief/base/file_io.h"
 #include "servers.h"
 #include "test_support.h"
@@ -25,46 +26,6 @@
 namespace relief::testing {
 namespace {
 namespace fs = std::filesystem;
-
-struct Response {
-  int status = 0;
-  std::map<std::string, std::string> headers;  // lower-case names
-  std::string body;
-};
-
-// One Content-Length framed response from a keep-alive connection.
-Response read_response(int fd, bool head_request) {
-  std::string data;
-  char buf[65536];
-  size_t header_end;
-  while ((header_end = data.find("\r\n\r\n")) == std::string::npos) {
-    const ssize_t n = ::recv(fd, buf, sizeof buf, 0);
-    if (n <= 0) return {};
-    data.append(buf, static_cast<size_t>(n));
-  }
-  Response r;
-  std::istringstream head(data.substr(0, header_end));
-  std::string line;
-  std::getline(head, line);
-  r.status = std::stoi(line.substr(9, 3));
-  while (std::getline(head, line)) {
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    const size_t colon = line.find(':');
-    if (colon == std::string::npos) continue;
-    std::string name = line.substr(0, colon);
-    for (char& c : name) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    r.headers[name] = line.substr(colon + 2);
-  }
-  r.body = data.substr(header_end + 4);
-  if (head_request || r.status == 304) return r;
-  const size_t want = std::stoul(r.headers["content-length"]);
-  while (r.body.size() < want) {
-    const ssize_t n = ::recv(fd, buf, sizeof buf, 0);
-    if (n <= 0) break;
-    r.body.append(buf, static_cast<size_t>(n));
-  }
-  return r;
-}
 
 std::string header(const Response& r, const std::string& name) {
   const auto it = r.headers.find(name);
