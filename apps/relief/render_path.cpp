@@ -109,7 +109,7 @@ Result<std::pair<std::vector<lod::Keyframe>, double>> read_path(const std::strin
       return fail(where +
                   ": needs \"time\" and \"camera\": [lon, lat, height, heading, pitch, roll]");
     }
-    std::array<double, 6> c{};
+    std::vector<double> c(6);
     for (size_t j = 0; j < 6; ++j) {
       if (!k["camera"][j].is_number()) return fail(where + ": camera values must be numbers");
       c[j] = k["camera"][j].get<double>();
@@ -117,7 +117,7 @@ Result<std::pair<std::vector<lod::Keyframe>, double>> read_path(const std::strin
     lod::Keyframe key;
     key.time = k["time"].get<double>();
     if (!std::isfinite(key.time)) return fail(where + ": \"time\" must be finite");
-    key.camera = {c[0], c[1], c[2], c[3], c[4], c[5], s.fov, s.width, s.height};
+    key.camera = RELIEF_TRY(camera_from_values(where, c, s));
     key.cut = k.value("cut", false);
     if (!keys.empty() && !(key.time > keys.back().time)) {
       return fail(where + ": times must increase");

@@ -136,15 +136,19 @@ double normalized_longitude(double lon) {
 
 }  // namespace
 
+Result<lod::Camera> camera_from_values(const std::string& where, const std::vector<double>& v,
+                                       const RenderSetup& s) {
+  // Heights below -1000 m (inside the ellipsoid) are refused by lod::make_view.
+  const Bound height{"height (m)", kNoLowerBound, kFarthest};
+  RELIEF_CHECK(
+      check_bounds(where.c_str(), v, {kLon, kLat, height, kHeading, kPitch, {"roll", -180, 180}}));
+  return lod::Camera{
+      normalized_longitude(v[0]), v[1], v[2], v[3], v[4], v[5], s.fov, s.width, s.height};
+}
+
 Result<lod::Camera> parse_camera(const Args& args, const RenderSetup& s) {
   if (auto c = args.get("--camera")) {
-    auto v = RELIEF_TRY(parse_numbers("--camera", *c, 6));
-    // Heights below -1000 m (inside the ellipsoid) are refused by lod::make_view.
-    const Bound height{"height (m)", kNoLowerBound, kFarthest};
-    RELIEF_CHECK(
-        check_bounds("--camera", v, {kLon, kLat, height, kHeading, kPitch, {"roll", -180, 180}}));
-    return lod::Camera{
-        normalized_longitude(v[0]), v[1], v[2], v[3], v[4], v[5], s.fov, s.width, s.height};
+    return camera_from_values("--camera", RELIEF_TRY(parse_numbers("--camera", *c, 6)), s);
   }
   auto v = RELIEF_TRY(parse_numbers("--look-at", *args.get("--look-at"), 6));
   // Targets as deep as the ocean floor (bathymetry), seen from any positive range.

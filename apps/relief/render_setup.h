@@ -4,6 +4,7 @@
 #include <array>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "args.h"
 #include "open_store.h"
@@ -32,6 +33,10 @@ lod::SelectionOptions selection_options(const RenderSetup& setup);
 
 // A camera from --camera or --look-at values, with the setup's viewport.
 Result<lod::Camera> parse_camera(const Args& args, const RenderSetup& setup);
+// A camera [lon, lat, height, heading, pitch, roll] checked against the same
+// bounds as --camera; errors start with `where` (an option or a keyframe).
+Result<lod::Camera> camera_from_values(const std::string& where, const std::vector<double>& v,
+                                       const RenderSetup& setup);
 
 // Writes RGBA pixels as a PNG, atomically.
 Status write_png(const std::string& path, std::span<const uint8_t> rgba, int width, int height);

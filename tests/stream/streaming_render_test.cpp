@@ -371,6 +371,14 @@ TEST_F(StreamingRenderTest, BadPathsAndOptionsAreOneLineErrors) {
                         "keyframe 1: times must increase"));
   EXPECT_TRUE(is_one_line_error(run("{\"keyframes\": [{\"time\": 0, \"camera\": [1, 2]}]}"),
                                 "keyframe 0: needs"));
+  // Keyframe cameras are held to the bounds of --camera.
+  EXPECT_TRUE(is_one_line_error(
+      run("{\"keyframes\": [{\"time\": 0, \"camera\": [1, 200, 3000, 0, -30, 0]}]}"),
+      "bad.json: keyframe 0: latitude 200 is not in [-90, 90]"));
+  EXPECT_TRUE(
+      is_one_line_error(run("{\"keyframes\": [{\"time\": 0, \"camera\": [1, 42, 3000, 0, -30, 0]},"
+                            "{\"time\": 1, \"camera\": [1, 42, 3000, 0, -95, 0]}]}"),
+                        "bad.json: keyframe 1: pitch -95 is not in [-90, 90]"));
   EXPECT_TRUE(is_one_line_error(run(ok, {"--mode", "sometimes"}), "--mode"));
   EXPECT_TRUE(is_one_line_error(run(ok, {"--pager", "radius:0"}), "--pager"));
   EXPECT_TRUE(is_one_line_error(run(ok, {"--memory-budget", "lots"}), "--memory-budget"));

@@ -95,10 +95,11 @@ Result<std::vector<std::byte>> encode_jpeg(const Raster& r, int quality) {
   if (!tj) return fail("jpeg: cannot initialise the encoder");
   unsigned char* jpeg = nullptr;
   unsigned long jpeg_size = 0;
-  if (tjCompress2(tj.get(), r.u8().data(), r.width(), 0, r.height(), TJPF_RGBA, &jpeg, &jpeg_size,
-                  TJSAMP_420, quality, TJFLAG_ACCURATEDCT) != 0) {
-    return fail(fmt::format("jpeg: {}", tjGetErrorStr2(tj.get())));
-  }
+  const int status = tjCompress2(tj.get(), r.u8().data(), r.width(), 0, r.height(), TJPF_RGBA,
+                                 &jpeg, &jpeg_size, TJSAMP_420, quality, TJFLAG_ACCURATEDCT);
+  // turbojpeg allocates the output buffer itself, and may have done so before failing.
+  const std::unique_ptr<unsigned char, decltype(&tjFree)> owned(jpeg, &tjFree);
+  if (status != 0) return fail(fmt::format("jpeg: {}", tjGetErrorStr2(tj.get())));
   std::vector<uint8_t> alpha(r.pixel_count());
   for (size_t i = 0; i < alpha.size(); ++i) alpha[i] = r.u8()[i * 4 + 3];
 
@@ -108,7 +109,6 @@ Result<std::vector<std::byte>> encode_jpeg(const Raster& r, int quality) {
   write_u32(all.first<kSizeField>(), static_cast<uint32_t>(jpeg_size));
   const std::span<std::byte> jpeg_part = all.subspan(kSizeField, jpeg_size);
   std::memcpy(jpeg_part.data(), jpeg, jpeg_part.size());
-  tjFree(jpeg);
   const std::span<std::byte> alpha_part = all.subspan(kSizeField + jpeg_size);
   const size_t n =
       ZSTD_compress(alpha_part.data(), alpha_part.size(), alpha.data(), alpha.size(), 3);
@@ -132,7 +132,10 @@ Result<Raster> decode_jpeg(std::span<const std::byte> p, int w, int h) {
     return fail("jpeg payload is corrupt or does not match the tile header");
   }
   Raster r(SampleType::UInt8, 4, w, h);
-  if (tjDecompress2(tj.get(), jpeg, jpeg_size, r.u8().data(), w, 0, h, TJPF_RGBA, 0) != 0) {
+  // A progressive file of thousands of scans decodes slowly whatever its size:
+  // stores never hold one (the encoder writes baseline), so it is refused.
+  if (tjDecompress2(tj.get(), jpeg, jpeg_size, r.u8().data(), w, 0, h, TJPF_RGBA,
+                    TJFLAG_LIMITSCANS) != 0) {
     return fail(fmt::format("jpeg payload is corrupt: {}", tjGetErrorStr2(tj.get())));
   }
   std::vector<uint8_t> alpha(r.pixel_count());
