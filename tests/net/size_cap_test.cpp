@@ -20,6 +20,7 @@
 #include "relief/net/http_source.h"
 #include "relief/tiles/store.h"
 #include "relief/tiles/store_layout.h"
+#include "servers.h"
 #include "test_support.h"
 
 namespace relief::testing {
@@ -65,15 +66,7 @@ class HostileServer {
     for (;;) {
       const int c = ::accept(fd_, nullptr, nullptr);
       if (c < 0) return;
-      std::string req;
-      char buf[4096];
-      while (req.find("\r\n\r\n") == std::string::npos) {
-        const ssize_t n = ::recv(c, buf, sizeof buf, 0);
-        if (n <= 0) break;
-        req.append(buf, static_cast<size_t>(n));
-      }
-      const size_t a = req.find(' '), b = req.find(' ', a + 1);
-      const std::string path = a == std::string::npos ? "" : req.substr(a + 2, b - a - 2);
+      const std::string path = read_request_path(c);
       const auto it = hostile_.find(path);
       const uint64_t sent = it == hostile_.end() ? serve_file(c, path) : flood(c, it->second);
       {

@@ -14,6 +14,18 @@
 
 namespace relief::testing {
 
+std::string read_request_path(int fd) {
+  std::string req;
+  char buf[4096];
+  while (req.find("\r\n\r\n") == std::string::npos) {
+    const ssize_t n = ::recv(fd, buf, sizeof buf, 0);
+    if (n <= 0) break;
+    req.append(buf, static_cast<size_t>(n));
+  }
+  const size_t a = req.find(' '), b = req.find(' ', a + 1);
+  return a == std::string::npos ? "" : req.substr(a + 2, b - a - 2);
+}
+
 int free_port() {
   const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
   sockaddr_in a{};
