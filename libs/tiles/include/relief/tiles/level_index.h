@@ -23,6 +23,10 @@ struct IndexEntry {
   float min = 0, max = 0;
   uint32_t valid_count = 0;
   uint32_t file_bytes = 0;
+  // Geometric error, metres: the largest vertical distance between this
+  // level's full mesh of the tile and the finest data below it (see
+  // docs/store-format.md). 0 at the finest level.
+  float error = 0;
 };
 
 class LevelIndex {

@@ -1,0 +1,34 @@
+#pragma once
+// The output of edge-mark refinement (seed 003 ch. 3): per selected quad, an
+// adaptive conforming triangulation of the quad's vertex grid, for the
+// renderer to draw instead of the fixed MeshTopology.
+//
+// The grid of a quad has (2^(k+1) + 1) x (2^k + 1) vertices (the quad is twice
+// as wide as tall in degrees), vertex (i, j) at quad-space u = i / 2^(k+1),
+// v = j / 2^k (u east, v south, as MeshVertex), id j * (2^(k+1) + 1) + i. Its
+// spacing is half a sample of the quad's data window: vertices with odd
+// (i, j) are sample centres, even ones sample corners. Heights come from the
+// quad's data window exactly as for MeshTopology vertices (vertices on a side
+// whose neighbour is coarser take the parent window's data), so vertices shared
+// by two quads are bit-identical.
+#include <cstdint>
+#include <vector>
+
+namespace relief::lod {
+
+struct RefinedQuad {
+  uint32_t first_index = 0;  // into RefinedMesh::indices
+  uint32_t index_count = 0;  // three per triangle, same winding as MeshTopology
+};
+
+struct RefinedMesh {
+  int grid_k = 0;
+  std::vector<uint32_t> indices;   // grid vertex ids
+  std::vector<RefinedQuad> quads;  // parallel to Selection::quads
+
+  uint32_t grid_columns() const { return (2u << grid_k) + 1; }
+  uint32_t grid_rows() const { return (1u << grid_k) + 1; }
+  uint64_t triangles() const { return indices.size() / 3; }
+};
+
+}  // namespace relief::lod
