@@ -224,20 +224,25 @@ Result<double> TerrainModel::quad_error(const geo::TileKey& key, QuadInfo& info)
   return info.error;
 }
 
+Result<double> TerrainModel::level_error(const geo::TileKey& key) {
+  if (key.level >= data_max_) return 0.0;
+  // The full mesh and the finest data both lie within the heights of the quad
+  // and of its neighbours (edge vertices may take a neighbour's samples).
+  HeightRange r = RELIEF_TRY(subtree_range(key));
+  for (int dy = -1; dy <= 1; ++dy) {
+    for (int dx = -1; dx <= 1; ++dx) {
+      if (auto n = key.neighbour(dx, dy)) r = unite(r, RELIEF_TRY(subtree_range(*n)));
+    }
+  }
+  return r.hi - r.lo;
+}
+
 Result<double> TerrainModel::mesh_error(const geo::TileKey& key) {
   // Flat triangles under the curved ellipsoid: the sagitta of one square.
   const double square = 2 * kPi / std::ldexp(1.0, key.level) / mesh_.squares_x();
   double error = geo::wgs84::kSemiMajorAxis * square * square / 8;
   if (key.level < data_max_) {
-    // The mesh and the finest data both lie within the heights of the quad and
-    // of its neighbours (edge vertices may take a neighbour's samples).
-    HeightRange r = RELIEF_TRY(subtree_range(key));
-    for (int dy = -1; dy <= 1; ++dy) {
-      for (int dx = -1; dx <= 1; ++dx) {
-        if (auto n = key.neighbour(dx, dy)) r = unite(r, RELIEF_TRY(subtree_range(*n)));
-      }
-    }
-    error += r.hi - r.lo;
+    error += RELIEF_TRY(level_error(key));
   } else {
     error += RELIEF_TRY(exact_mesh_error(key));
   }

@@ -98,6 +98,11 @@ class TerrainModel {
   Result<QuadInfo*> quad(const geo::TileKey& key);
   Result<double> quad_error(const geo::TileKey& key, QuadInfo& info);
 
+  // Upper bound, metres, of the vertical distance between the full mesh of
+  // quad `key`'s level data (every sample a vertex) and the finest data below
+  // it: 0 at and beyond the store's finest level. Needs no tiles.
+  Result<double> level_error(const geo::TileKey& key);
+
   // Bilinear height at interior sample coordinates (x, y) of a bordered tile,
   // exactly as the renderer's vertex shader computes it.
   static float bilinear(const tiles::Raster& bordered, int border, double x, double y);
