@@ -159,9 +159,10 @@ TEST_F(StreamingRenderTest, InteractiveFramesConvergeToTheCompleteFrame) {
   const auto ev = events("interactive");
   EXPECT_FALSE(ev.empty());
   expect_valid_lifecycles(ev);
-  // The exact mesh errors of the finest tiles' quads were measured by the
-  // loader's threads as the tiles arrived, none on the render thread.
-  EXPECT_EQ(frames.back()["exact_errors"]["measured"].get<int>(), 0);
+  // The exact mesh errors of the quads were measured by the loader's threads
+  // as the tiles arrived, on the render thread only that of the level-0 tile
+  // (the loader holds it from its creation, before the model asked).
+  EXPECT_LE(frames.back()["exact_errors"]["measured"].get<int>(), 1);
   EXPECT_GT(frames.back()["exact_errors"]["prepared"].get<int>(), 0);
   // Every frame, the first included (level-0 data only), covers the ground: no holes.
   for (size_t i = 0; i < frames.size(); i += std::max<size_t>(1, frames.size() / 6)) {

@@ -10,8 +10,11 @@ namespace relief::lod {
 
 // max |mesh - data| over the samples of bordered tile `t` inside window `w`,
 // for the plain and the split border triangles, the mesh's vertices taking
-// the tile's bilinear heights (as the vertex shader does).
+// the tile's bilinear heights (as the vertex shader does). With `full_mesh`,
+// against the tile's full mesh instead (every sample a vertex, sample corners
+// at their bilinear heights), whose vertices are the samples and the corners:
+// the mesh is a coarsening of it, so their largest difference is at those.
 double mesh_sample_error(const MeshTopology& mesh, const tiles::Raster& t, int border,
-                         const DataWindow& w);
+                         const DataWindow& w, bool full_mesh = false);
 
 }  // namespace relief::lod

@@ -12,6 +12,7 @@
 #include <fmt/format.h>
 
 #include "relief/geo/ellipsoid.h"
+#include "relief/lod/screen_error.h"
 
 namespace relief::lod {
 
@@ -111,7 +112,7 @@ class Selector {
     }
     const double d = distance_to(box, view_ref.eye);
     const double error = RELIEF_TRY(terrain_.quad_error(key, *info));
-    leaf.error_pixels = d > 0 ? error * view_ref.pixels_per_radian / d : INFINITY;
+    leaf.error_pixels = vertical_error_pixels(view_ref, box, key.bounds(), error);
     // Up to the finest level of the data (and of the draped texture), a quad
     // must also provide at least one sample per pixel it covers (seed 003
     // §1.4.2 step 5): shading and imagery are sampled per pixel from them.

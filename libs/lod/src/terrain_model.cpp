@@ -220,8 +220,16 @@ Result<TerrainModel::QuadInfo*> TerrainModel::quad(const geo::TileKey& key) {
 }
 
 Result<double> TerrainModel::quad_error(const geo::TileKey& key, QuadInfo& info) {
-  if (info.error < 0) info.error = RELIEF_TRY(mesh_error(key));
+  if (info.error < 0 || (info.estimated && data_resident(key))) {
+    info.estimated = !data_resident(key);
+    info.error = RELIEF_TRY(mesh_error(key));
+  }
   return info.error;
+}
+
+bool TerrainModel::data_resident(const geo::TileKey& key) {
+  const DataWindow w = window(key), p = parent_window(key);
+  return (!w.tile || available(*w.tile)) && (!p.tile || available(*p.tile));
 }
 
 Result<double> TerrainModel::level_error(const geo::TileKey& key) {
@@ -241,12 +249,16 @@ Result<double> TerrainModel::mesh_error(const geo::TileKey& key) {
   // Flat triangles under the curved ellipsoid: the sagitta of one square.
   const double square = 2 * kPi / std::ldexp(1.0, key.level) / mesh_.squares_x();
   double error = geo::wgs84::kSemiMajorAxis * square * square / 8;
-  if (key.level < data_max_) {
-    error += RELIEF_TRY(level_error(key));
-  } else {
-    error += RELIEF_TRY(exact_mesh_error(key));
+  if (!data_resident(key)) {
+    // Only the loading of data ahead of the view asks without the tile: an
+    // estimate, the error of the ancestor whose samples are as far apart as
+    // this mesh's vertices (replaced by the bound once the tile is resident).
+    const int coarser = std::max(0, static_cast<int>(std::log2(height_)) - mesh_.refinement());
+    geo::TileKey a = key;
+    for (int i = 0; i < coarser && a.level > 0; ++i) a = *a.parent();
+    return error + RELIEF_TRY(level_error(a));
   }
-  return error;
+  return error + RELIEF_TRY(level_error(key)) + RELIEF_TRY(exact_mesh_error(key));
 }
 
 struct TerrainModel::PreparedErrors {
@@ -254,9 +266,11 @@ struct TerrainModel::PreparedErrors {
   std::unordered_map<geo::TileKey, double, geo::TileKeyHash> errors;
 };
 
-// max |mesh - data| over the finest samples of the quad (measured by the
-// loader's threads when they prepared it); at the store's finest level plus
-// the largest change of an edge vertex that takes the coarser parent data.
+// max |mesh - data| over the samples of the quad (measured by the loader's
+// threads when they prepared it); above the store's finest level against the
+// full mesh of the quad's data, to which level_error() adds the distance to
+// the finest data. Plus the largest change of an edge vertex that takes the
+// coarser parent data.
 Result<double> TerrainModel::exact_mesh_error(const geo::TileKey& key) {
   const DataWindow w = window(key);
   if (!w.tile) return 0.0;
@@ -269,10 +283,10 @@ Result<double> TerrainModel::exact_mesh_error(const geo::TileKey& key) {
   if (worst) {
     ++error_counts_.prepared;
   } else {
-    worst = mesh_sample_error(mesh_, *t, border_, w);
+    worst = mesh_sample_error(mesh_, *t, border_, w, key.level < data_max_);
     ++error_counts_.measured;
   }
-  if (key.level == data_max_ && key.level > 0) {
+  if (key.level <= data_max_ && key.level > 0) {
     const DataWindow pw = parent_window(key);
     const TilePtr pt = pw.tile ? RELIEF_TRY(tile(*pw.tile)) : TilePtr{};
     double edge = 0;
@@ -295,9 +309,13 @@ void TerrainModel::prepare_errors_on_load() {
   provider_->set_prepare([prepared = prepared_, mesh = mesh_, border = border_,
                           data_max = data_max_, max_level = max_level_, width = width_,
                           height = height_](const geo::TileKey& key, const tiles::Raster& tile) {
-    if (key.level != data_max) return;
+    if (key.level > data_max) return;
     std::vector<std::pair<geo::TileKey, double>> errors;
-    for (int m = 0; m <= max_level - data_max; ++m) {
+    if (key.level < data_max) {  // the quad of the tile alone, against its full mesh
+      const DataWindow w{key, 0, 0, double(width), double(height)};
+      errors.emplace_back(key, mesh_sample_error(mesh, tile, border, w, true));
+    }
+    for (int m = 0; key.level == data_max && m <= max_level - data_max; ++m) {
       DataWindow w{key, 0, 0, std::ldexp(width, -m), std::ldexp(height, -m)};
       for (uint32_t y = 0; y < (1u << m); ++y) {
         for (uint32_t x = 0; x < (1u << m); ++x) {

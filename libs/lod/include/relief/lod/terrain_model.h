@@ -93,7 +93,8 @@ class TerrainModel {
   struct QuadInfo {
     HeightRange range;
     Box box;
-    double error = -1;  // < 0: not measured yet
+    double error = -1;       // < 0: not measured yet
+    bool estimated = false;  // the quad's data was not resident: an estimate
   };
   Result<QuadInfo*> quad(const geo::TileKey& key);
   Result<double> quad_error(const geo::TileKey& key, QuadInfo& info);
@@ -121,6 +122,9 @@ class TerrainModel {
   TerrainModel(const tiles::Store* store, const MeshTopology& mesh,
                std::unique_ptr<TileProvider> owned, TileProvider* provider);
   Result<HeightRange> height_range(const geo::TileKey& key);
+  // Whether the data the quad draws is resident: its tile and, for its sides
+  // shared with a coarser quad, its parent's (or there are none).
+  bool data_resident(const geo::TileKey& key);
   // Upper bound, in metres, of |mesh - finest data| over the quad, including
   // the chord error of flat triangles on the curved ellipsoid.
   Result<double> mesh_error(const geo::TileKey& key);
