@@ -5,8 +5,10 @@
 // later frames), GPU frame time (draw calls to glFinish, median of 3 after a
 // warm-up draw, for both meshes), the selection's screen-space error bound
 // (its estimate of the largest error) and the error measured on random finest
-// samples (mesh_error.h). With a second argument, the rows are also appended
-// to that file as a markdown table.
+// samples (mesh_error.h), triangles per screen pixel. VIEWS names the fixed
+// views (pyrenees: the bundled SRTM pair; himalaya: the 4 x 6 degree SRTM3
+// block of ../shared/data/dem/srtm3-h44). With a third argument, the rows are
+// also appended to that file as a markdown table.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -77,13 +79,18 @@ Result<Measure> measure(const tiles::Store& store, const lod::View& view, int me
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc != 2 && argc != 3) {
-    std::fprintf(stderr, "usage: render_bench STORE [MARKDOWN_ROWS_OUT]\n");
+  if (argc != 3 && argc != 4) {
+    std::fprintf(stderr, "usage: render_bench STORE pyrenees|himalaya [MARKDOWN_ROWS_OUT]\n");
     return 2;
   }
-  FILE* markdown = argc == 3 ? std::fopen(argv[2], "a") : nullptr;
-  if (argc == 3 && !markdown) {
-    std::fprintf(stderr, "%s: cannot open for appending\n", argv[2]);
+  const std::string view_set = argv[2];
+  if (view_set != "pyrenees" && view_set != "himalaya") {
+    std::fprintf(stderr, "%s: unknown view set (pyrenees, himalaya)\n", argv[2]);
+    return 2;
+  }
+  FILE* markdown = argc == 4 ? std::fopen(argv[3], "a") : nullptr;
+  if (argc == 4 && !markdown) {
+    std::fprintf(stderr, "%s: cannot open for appending\n", argv[3]);
     return 1;
   }
   auto store = tiles::Store::open(argv[1]);
@@ -103,13 +110,23 @@ int main(int argc, char** argv) {
     const char* name;
     lod::Camera camera;
   };
-  const ViewCase views[] = {
+  const std::vector<ViewCase> pyrenees = {
       {"globe", {1.5, 30, 12e6, 0, -90, 0, 60, 1280, 720}},
       {"regional oblique", lod::look_at(1.5, 42.5, 1500, 60000, 20, -35, 60, 1280, 720)},
       {"low flight to the horizon", {1.05, 42.05, 2300, 35, -4, 0, 60, 1280, 720}},
   };
-  std::printf("%-27s %-6s %8s %11s %6s %10s %10s %9s %8s %11s\n", "view", "mesh", "quads",
-              "triangles", "draws", "select ms", "(cold ms)", "gpu ms", "bound px", "measured px");
+  // The block spans 78-84 E, 28-32 N: plains (~200 m) in the south-west, the
+  // main range (to 7 800 m) across it.
+  const std::vector<ViewCase> himalaya = {
+      {"globe", {81, 30, 12e6, 0, -90, 0, 60, 1280, 720}},
+      {"regional oblique", lod::look_at(81, 30, 4000, 150000, 20, -35, 60, 1280, 720)},
+      {"low flight to the horizon", {80.5, 28.55, 1200, 20, -3, 0, 60, 1280, 720}},
+      {"straight down from 900 km", {81, 30, 900e3, 0, -90, 0, 60, 1280, 720}},
+  };
+  const std::vector<ViewCase>& views = view_set == "himalaya" ? himalaya : pyrenees;
+  std::printf("%-27s %-6s %8s %11s %7s %6s %10s %10s %9s %8s %11s\n", "view", "mesh", "quads",
+              "triangles", "tri/px", "draws", "select ms", "(cold ms)", "gpu ms", "bound px",
+              "measured px");
   for (const ViewCase& v : views) {
     auto view = lod::make_view(v.camera);
     if (!view) {
@@ -122,21 +139,24 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "%s\n", (!lod_m ? lod_m.error() : full_m.error()).message.c_str());
       return 1;
     }
+    const double pixels = double(view->width) * view->height;
     for (const auto& [label, m] : {std::pair{"LOD", *lod_m}, std::pair{"full", *full_m}}) {
-      std::printf("%-27s %-6s %8u %11llu %6u %10.2f %10.1f %9.1f %8.2f %11.2f\n", v.name, label,
-                  m.quads, static_cast<unsigned long long>(m.triangles), m.draw_calls, m.warm_ms,
-                  m.cold_ms, m.gpu_ms, m.error_bound, m.measured_error);
+      std::printf("%-27s %-6s %8u %11llu %7.2f %6u %10.2f %10.1f %9.1f %8.2f %11.2f\n", v.name,
+                  label, m.quads, static_cast<unsigned long long>(m.triangles),
+                  double(m.triangles) / pixels, m.draw_calls, m.warm_ms, m.cold_ms, m.gpu_ms,
+                  m.error_bound, m.measured_error);
     }
     if (markdown) {
       std::fprintf(markdown,
-                   "| %s | LOD | %u | %llu | %u | %.2f ms | %.1f ms | %.1f ms | %.2f px | %.2f px "
-                   "(%zu samples) |\n",
+                   "| %s | LOD | %u | %llu | %.2f | %u | %.2f ms | %.1f ms | %.1f ms | %.2f px | "
+                   "%.2f px (%zu samples) |\n",
                    v.name, lod_m->quads, static_cast<unsigned long long>(lod_m->triangles),
-                   lod_m->draw_calls, lod_m->warm_ms, lod_m->cold_ms, lod_m->gpu_ms,
-                   lod_m->error_bound, lod_m->measured_error, lod_m->error_samples);
-      std::fprintf(markdown, "| | brute force | %u | %llu | %u | | | %.1f ms | | |\n",
+                   double(lod_m->triangles) / pixels, lod_m->draw_calls, lod_m->warm_ms,
+                   lod_m->cold_ms, lod_m->gpu_ms, lod_m->error_bound, lod_m->measured_error,
+                   lod_m->error_samples);
+      std::fprintf(markdown, "| | brute force | %u | %llu | %.2f | %u | | | %.1f ms | | |\n",
                    full_m->quads, static_cast<unsigned long long>(full_m->triangles),
-                   full_m->draw_calls, full_m->gpu_ms);
+                   double(full_m->triangles) / pixels, full_m->draw_calls, full_m->gpu_ms);
     }
     std::printf("%-27s ratio: %.1fx fewer triangles, %.1fx less GPU time\n", v.name,
                 static_cast<double>(full_m->triangles) /
@@ -144,7 +164,7 @@ int main(int argc, char** argv) {
                 full_m->gpu_ms / std::max(1e-9, lod_m->gpu_ms));
   }
   if (markdown && std::fclose(markdown) != 0) {
-    std::fprintf(stderr, "%s: write failed\n", argv[2]);
+    std::fprintf(stderr, "%s: write failed\n", argv[3]);
     return 1;
   }
   return 0;

@@ -111,8 +111,16 @@ class Selector {
       return leaf;
     }
     const double d = distance_to(box, view_ref.eye);
-    const double error = RELIEF_TRY(terrain_.quad_error(key, *info));
-    leaf.error_pixels = vertical_error_pixels(view_ref, box, key.bounds(), error);
+    if (o_.mode == LodMode::edge_marks) {
+      // Refinement inside the quad can reach its full mesh, no closer to the
+      // finest data than level_error: that share decides the split.
+      const double error = RELIEF_TRY(terrain_.level_error(key));
+      leaf.error_pixels = vertical_error_pixels(view_ref, box, key.bounds(), error) /
+                          o_.level_error_share;
+    } else {
+      const double error = RELIEF_TRY(terrain_.quad_error(key, *info));
+      leaf.error_pixels = vertical_error_pixels(view_ref, box, key.bounds(), error);
+    }
     // Up to the finest level of the data (and of the draped texture), a quad
     // must also provide at least one sample per pixel it covers (seed 003
     // §1.4.2 step 5): shading and imagery are sampled per pixel from them.
@@ -243,7 +251,7 @@ class Selector {
           fmt::format("level of detail: more than {} quads; raise --pixel-error", o_.max_quads));
     }
     const Leaf leaf = RELIEF_TRY(assess(key));
-    bool split = leaf.visible && key.level < terrain_.max_level() &&
+    bool split = leaf.visible && key.level < deepest() &&
                  (leaf.error_pixels > o_.pixel_error || leaf.split_for_samples);
     if (split) split = RELIEF_TRY(children_available(key));
     if (!split) {
@@ -252,6 +260,11 @@ class Selector {
     }
     for (int c = 0; c < 4; ++c) RELIEF_CHECK(visit(key.child(c & 1, c >> 1)));
     return {};
+  }
+
+  // Edge marks refine inside quads down to every sample: no virtual levels.
+  int deepest() const {
+    return o_.mode == LodMode::edge_marks ? terrain_.data_max_level() : terrain_.max_level();
   }
 
   // The leaf whose area contains quad `key` (key itself or an ancestor), if any.

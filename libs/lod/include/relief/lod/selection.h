@@ -17,8 +17,19 @@
 
 namespace relief::lod {
 
+// How the mesh of a selected quad is made: the fixed MeshTopology, quads
+// split down to virtual levels where every sample is a vertex; or edge-mark
+// refinement of each quad's own grid (seed 003 ch. 3, lod/refine.h), quads
+// going no deeper than the data.
+enum class LodMode { quads, edge_marks };
+
 struct SelectionOptions {
   double pixel_error = 1.0;  // largest allowed screen-space error, pixels
+  LodMode mode = LodMode::quads;
+  // Edge marks: a quad splits while the distance of its level's full mesh to
+  // the finest data (TerrainModel::level_error) projects to more than this
+  // share of pixel_error; the refinement inside it has the rest.
+  double level_error_share = 0.5;
   // A draped texture (imagery store), or null. Where the elevation data or
   // the texture has a tile, a quad also splits while one of its samples
   // covers more than a pixel (seed 003 §1.4.2, step 5).
