@@ -5,7 +5,7 @@
 // later frames), GPU frame time (draw calls to glFinish, median of 3 after a
 // warm-up draw, for both meshes), the selection's screen-space error bound
 // (its estimate of the largest error) and the error measured on random finest
-// samples (mesh_error.h), triangles per screen pixel. VIEWS names the fixed
+// samples (lod/measured_error.h), triangles per screen pixel. VIEWS names the fixed
 // views (pyrenees: the bundled SRTM pair; himalaya: the 4 x 6 degree SRTM3
 // block of ../shared/data/dem/srtm3-h44). With a third argument, the rows are
 // also appended to that file as a markdown table.
@@ -16,7 +16,7 @@
 #include <string>
 #include <vector>
 
-#include "mesh_error.h"
+#include "relief/lod/measured_error.h"
 #include "relief/lod/selection.h"
 #include "relief/render/terrain_renderer.h"
 
@@ -59,9 +59,10 @@ Result<Measure> measure(const tiles::Store& store, const lod::View& view, int me
   m.quads = first.stats.quads;
   m.error_bound = first.stats.max_error_pixels;
   if (!full) {
-    bench::MeshError error(terrain, first);
-    m.measured_error = RELIEF_TRY(
-        error.sampled_max(view, first, store.manifest().extent, kErrorSamples, m.error_samples));
+    const lod::MeasuredError e = RELIEF_TRY(
+        lod::measure_screen_error(view, terrain, first, store.manifest().extent, kErrorSamples));
+    m.measured_error = e.max_pixels;
+    m.error_samples = e.samples;
   }
   auto target = RELIEF_TRY(render::make_offscreen_target(view.width, view.height));
   auto renderer = RELIEF_TRY(render::TerrainRenderer::create(terrain, nullptr));

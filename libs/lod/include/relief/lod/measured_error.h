@@ -1,0 +1,27 @@
+#pragma once
+// The screen-space error of a frame's mesh, measured rather than bounded:
+// finest samples projected from the data and from the mesh as the vertex
+// shader builds it (lod::MeshEvaluator), the largest distance between the two
+// in pixels, over random finest samples of the selected quads that land on
+// screen. A lower bound of the true maximum, to set against the selection's
+// upper bound: what `relief render --stats` and bench/render report.
+#include <cstddef>
+
+#include "relief/base/result.h"
+#include "relief/geo/tile_key.h"
+#include "relief/lod/selection.h"
+
+namespace relief::lod {
+
+struct MeasuredError {
+  double max_pixels = 0;
+  size_t samples = 0;  // finest samples compared (on screen)
+};
+
+// Over `samples` random draws (a fixed seed: the same frame gives the same
+// figure) inside the data's `extent`.
+Result<MeasuredError> measure_screen_error(const View& view, TerrainModel& terrain,
+                                           const Selection& selection, const geo::GeoBox& extent,
+                                           int samples);
+
+}  // namespace relief::lod
