@@ -116,24 +116,19 @@ int render_still(const Args& args, RenderSetup& setup) {
                                     camera->height, **ground, camera->lon, camera->lat));
   }
 
-  // The brute-force reference: one vertex per finest sample, no deeper quads.
-  const int full_level = static_cast<int>(std::log2(store.grid().height()));
-  const lod::MeshTopology mesh(setup.full_resolution ? full_level : setup.mesh_level);
-  lod::TerrainModel terrain(&store, mesh, uint64_t{512} << 20);
-  auto selection = lod::select_quads(*view, terrain, selection_options(setup));
-  if (!selection) return report_error(selection.error().message);
-
+  // Complete frame: every tile read first. The brute-force reference
+  // (--full-resolution) has one vertex per finest sample, no deeper quads.
+  view::SceneOptions so = scene_options(setup);
+  so.interactive = false;
+  so.loader.memory_budget = uint64_t{512} << 20;
   auto context = render::GlContext::create_headless();
   if (!context) return report_error(context.error().message);
   auto target = render::make_offscreen_target(setup.width, setup.height);
   if (!target) return report_error(target.error().message);
-  auto renderer = render::TerrainRenderer::create(
-      terrain, setup.imagery ? &*setup.imagery : nullptr, setup.gpu_budget);
-  if (!renderer) return report_error(renderer.error().message);
-  render::RenderOptions ro;
-  ro.exaggeration = static_cast<float>(setup.exaggeration);
-  ro.sky = setup.sky;
-  auto frame = (*renderer)->draw(*view, *selection, **target, ro);
+  auto scene =
+      view::Scene::create(store, setup.imagery ? &*setup.imagery : nullptr, so, steady_clock());
+  if (!scene) return report_error(scene.error().message);
+  auto frame = (*scene)->draw(*camera, **target);
   if (!frame) return report_error(frame.error().message);
   auto pixels = (*target)->read_rgba();
   if (!pixels) return report_error(pixels.error().message);
@@ -142,14 +137,15 @@ int render_still(const Args& args, RenderSetup& setup) {
     return report_error(st.error().message);
   }
   if (auto path = args.get("--stats")) {
-    if (auto st = write_json(*path, stats_json(*selection, *frame).dump(1)); !st) {
+    if (auto st = write_json(*path, stats_json((*scene)->last_selection(), frame->draw).dump(1));
+        !st) {
       return report_error(st.error().message);
     }
   }
   std::printf("wrote %s: %dx%d, %u quads, %llu triangles, selection %.2f ms, gpu %.1f ms\n",
-              out.c_str(), setup.width, setup.height, selection->stats.quads,
-              static_cast<unsigned long long>(frame->triangles), selection->stats.seconds * 1e3,
-              frame->gpu_seconds * 1e3);
+              out.c_str(), setup.width, setup.height, frame->selection.quads,
+              static_cast<unsigned long long>(frame->draw.triangles),
+              frame->selection.seconds * 1e3, frame->draw.gpu_seconds * 1e3);
   return 0;
 }
 

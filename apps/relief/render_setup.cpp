@@ -84,11 +84,16 @@ Result<RenderSetup> parse_render_setup(const Args& args) {
   return s;
 }
 
-lod::SelectionOptions selection_options(const RenderSetup& setup) {
-  lod::SelectionOptions so;
-  so.pixel_error = setup.pixel_error;
+view::SceneOptions scene_options(const RenderSetup& setup) {
+  view::SceneOptions so;
+  so.selection.pixel_error = setup.pixel_error;
+  so.selection.full_resolution = setup.full_resolution;
+  if (setup.imagery) so.selection.texture = &*setup.imagery;
   so.full_resolution = setup.full_resolution;
-  if (setup.imagery) so.texture = &*setup.imagery;
+  so.mesh_level = setup.mesh_level;
+  so.gpu_budget = setup.gpu_budget;
+  so.render.exaggeration = static_cast<float>(setup.exaggeration);
+  so.render.sky = setup.sky;
   return so;
 }
 

@@ -8,8 +8,8 @@
 
 #include "args.h"
 #include "open_store.h"
-#include "relief/lod/selection.h"
 #include "relief/tiles/store.h"
+#include "relief/view/scene.h"
 
 namespace relief::cli {
 
@@ -28,8 +28,9 @@ struct RenderSetup {
 
 Result<RenderSetup> parse_render_setup(const Args& args);
 
-// Selection options of a setup (imagery sets the texture level).
-lod::SelectionOptions selection_options(const RenderSetup& setup);
+// Scene options of a setup: selection (imagery sets the texture level), mesh,
+// GPU budget, drawing.
+view::SceneOptions scene_options(const RenderSetup& setup);
 
 // A camera from --camera or --look-at values, with the setup's viewport.
 Result<lod::Camera> parse_camera(const Args& args, const RenderSetup& setup);

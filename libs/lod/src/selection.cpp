@@ -115,8 +115,8 @@ class Selector {
       // Refinement inside the quad can reach its full mesh, no closer to the
       // finest data than level_error: that share decides the split.
       const double error = RELIEF_TRY(terrain_.level_error(key));
-      leaf.error_pixels = vertical_error_pixels(view_ref, box, key.bounds(), error) /
-                          o_.level_error_share;
+      leaf.error_pixels =
+          vertical_error_pixels(view_ref, box, key.bounds(), error) / o_.level_error_share;
     } else {
       const double error = RELIEF_TRY(terrain_.quad_error(key, *info));
       leaf.error_pixels = vertical_error_pixels(view_ref, box, key.bounds(), error);

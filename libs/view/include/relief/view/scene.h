@@ -1,0 +1,87 @@
+#pragma once
+// The frame loop's core, shared by `relief render` (stills and paths), the
+// viewer, the movie exporter and the cluster renderer: a scene of an
+// elevation store and an optional draped imagery store with their loaders,
+// the terrain model, the level-of-detail selection and the renderer. Each
+// call to draw() makes one frame of a camera: selection over what is resident
+// (interactive) or over everything (complete frames, which wait for their
+// tiles), requests in view priority, prefetch along the camera's motion,
+// drawing. Time comes from an injected Clock.
+//
+// Used on the thread that owns the GL context (the renderer's rule); the
+// loaders' threads are internal.
+#include <functional>
+#include <memory>
+
+#include "relief/base/clock.h"
+#include "relief/base/result.h"
+#include "relief/lod/selection.h"
+#include "relief/render/terrain_renderer.h"
+#include "relief/stream/tile_loader.h"
+
+namespace relief::view {
+
+struct SceneOptions {
+  // Interactive frames never wait for I/O: tiles load on the loaders' threads
+  // and frames draw what is resident. Complete frames read every tile they
+  // need first.
+  bool interactive = true;
+  stream::LoaderOptions loader;  // elevation; its memory budget also bounds complete frames' cache
+  uint64_t imagery_budget = uint64_t{512} << 20;  // the imagery loader's memory budget
+  uint64_t gpu_budget = uint64_t{1} << 30;
+  int mesh_level = 4;
+  lod::SelectionOptions selection;
+  render::RenderOptions render;
+  // Prefetch: while the camera moves, also request what a selection this
+  // many frames ahead on the same motion would want (at lower priority).
+  bool prefetch = true;
+  double lookahead_frames = 10;
+  // > 0: load every tile within this many tile sizes of the eye instead of by
+  // view priority (the radius pager, a baseline for benchmarks).
+  double radius_tiles = 0;
+  // Full-resolution mesh (brute force reference; stills only).
+  bool full_resolution = false;
+};
+
+struct FrameReport {
+  lod::Camera camera;
+  lod::SelectionStats selection;
+  render::FrameStats draw;
+  double frame_seconds = 0;  // selection to the end of drawing, on the clock
+  double cpu_seconds = 0;    // the same without the wait for the GPU
+  // Everything this frame wanted was resident and drawn (elevation and
+  // imagery): the frame equals the complete frame of its camera.
+  bool complete = false;
+};
+
+class Scene {
+ public:
+  // `elevation` and `imagery` (may be null) and `clock` must outlive the
+  // scene. Needs a current GL context.
+  static Result<std::unique_ptr<Scene>> create(const tiles::Store& elevation,
+                                               const tiles::Store* imagery,
+                                               const SceneOptions& options, const Clock& clock);
+  ~Scene();
+  Scene(const Scene&) = delete;
+  Scene& operator=(const Scene&) = delete;
+
+  // One frame of `camera` into `target`.
+  Result<FrameReport> draw(const lod::Camera& camera, render::RenderTarget& target);
+  // The next frame does not continue the previous one's motion (a cut in a
+  // path, a jump in the viewer): no prefetch between them.
+  void cut();
+
+  const SceneOptions& options() const;
+  lod::TerrainModel& terrain();
+  const lod::Selection& last_selection() const;  // of the last draw()
+  // Null for complete frames (no loaders) or without imagery.
+  stream::TileLoader* elevation_loader();
+  stream::TileLoader* imagery_loader();
+
+ private:
+  struct Impl;
+  explicit Scene(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace relief::view

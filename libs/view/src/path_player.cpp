@@ -1,0 +1,126 @@
+#include "relief/view/path_player.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <unordered_set>
+
+namespace relief::view {
+
+namespace {
+
+using TileSet = std::unordered_set<geo::TileKey, geo::TileKeyHash>;
+
+// Adds the data tiles a selection draws (own and parent data) to `tiles`;
+// with `ancestors`, also the tiles above them, which a coarse-first loader
+// must have fetched before.
+void add_drawn(TileSet& tiles, lod::TerrainModel& terrain, const lod::Selection& selection,
+               bool ancestors) {
+  for (const auto& q : selection.quads) {
+    for (const auto& w : {terrain.window(q.key), terrain.parent_window(q.key)}) {
+      if (!w.tile) continue;
+      for (std::optional<geo::TileKey> k = *w.tile; k; k = ancestors ? k->parent() : std::nullopt) {
+        if (!tiles.insert(*k).second && ancestors) break;  // its ancestors are in already
+      }
+    }
+  }
+}
+
+uint64_t file_bytes(const tiles::Store& store, const TileSet& tiles) {
+  uint64_t bytes = 0;
+  for (const auto& k : tiles) {
+    if (const auto* e = store.index(k.level).find(k)) bytes += e->file_bytes;
+  }
+  return bytes;
+}
+
+}  // namespace
+
+double percentile(std::vector<double> v, double p) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  const size_t i = std::min(
+      v.size() - 1,
+      static_cast<size_t>(std::max(1.0, std::ceil(p * static_cast<double>(v.size())))) - 1);
+  return v[i];
+}
+
+Result<PathSummary> play_path(Scene& scene, const std::vector<lod::Keyframe>& keys,
+                              size_t frame_count, const PathOptions& options,
+                              render::RenderTarget& target, const Clock& clock,
+                              const PathCallbacks& callbacks) {
+  const bool interactive = scene.options().interactive;
+  const tiles::Store* store = scene.terrain().store();
+  std::vector<double> frame_ms, cpu_ms, frame_times;
+  std::vector<bool> complete_frames;
+  std::vector<std::pair<size_t, double>> cuts;  // first frame after (1-based, 0: not yet), time
+  for (size_t k = 1; k < keys.size(); ++k) {
+    if (keys[k].cut) cuts.emplace_back(0, keys[k].time);
+  }
+  TileSet drawn;
+  PathSummary summary;
+  const auto start = clock.now();
+  double settle_start = -1;
+  for (size_t index = 0;; ++index) {
+    const bool on_path = index < frame_count;
+    if (!on_path) {
+      if (!interactive || summary.complete) break;
+      const double now = seconds_between(start, clock.now());
+      if (settle_start < 0) settle_start = now;
+      if (now - settle_start >= options.until_complete) break;
+    }
+    const double t =
+        keys.front().time + static_cast<double>(std::min(index, frame_count - 1)) / options.fps;
+    const lod::Camera camera = lod::camera_at(keys, t);
+    for (auto& [frame_of_cut, time] : cuts) {
+      if (!frame_of_cut && t >= time) {
+        frame_of_cut = index + 1;
+        scene.cut();
+      }
+    }
+    if (callbacks.frame_start) callbacks.frame_start(index);
+    const auto frame_start = clock.now();
+    FrameRecord record;
+    record.index = index;
+    record.time = seconds_between(start, frame_start);
+    record.report = RELIEF_TRY(scene.draw(camera, target));
+    summary.complete = record.report.complete;
+    frame_ms.push_back(record.report.frame_seconds * 1e3);
+    cpu_ms.push_back(record.report.cpu_seconds * 1e3);
+    frame_times.push_back(record.time);
+    complete_frames.push_back(record.report.complete);
+    if (store) add_drawn(drawn, scene.terrain(), scene.last_selection(), true);
+    if (callbacks.frame_done) RELIEF_CHECK(callbacks.frame_done(record));
+    if (interactive) {  // real time: the next frame is due 1/fps after this one
+      clock.sleep_until(frame_start + std::chrono::duration_cast<Clock::Duration>(
+                                          std::chrono::duration<double>(1 / options.fps)));
+    }
+  }
+  summary.frames = frame_ms.size();
+  summary.p50_frame_ms = percentile(frame_ms, 0.5);
+  summary.p99_frame_ms = percentile(frame_ms, 0.99);
+  summary.max_frame_ms = percentile(frame_ms, 1.0);
+  summary.p50_cpu_ms = percentile(cpu_ms, 0.5);
+  summary.p99_cpu_ms = percentile(cpu_ms, 0.99);
+  for (const auto& [frame_of_cut, time] : cuts) {
+    if (!frame_of_cut) continue;
+    CutReport c{frame_of_cut - 1, std::nullopt};
+    for (size_t i = c.frame; i < complete_frames.size(); ++i) {
+      if (complete_frames[i]) {
+        c.complete_after_s = frame_times[i] - frame_times[c.frame];
+        break;
+      }
+    }
+    summary.cuts.push_back(c);
+  }
+  if (store) {
+    TileSet last;
+    for (const tiles::IndexEntry& e : store->index(0).entries()) last.insert(e.key);
+    add_drawn(last, scene.terrain(), scene.last_selection(), false);
+    summary.final_view_bytes = file_bytes(*store, last);
+    summary.drawn_bytes = file_bytes(*store, drawn);
+  }
+  return summary;
+}
+
+}  // namespace relief::view

@@ -1,0 +1,150 @@
+#include "relief/view/scene.h"
+
+#include <algorithm>
+#include <cmath>
+#include <optional>
+
+#include "relief/stream/radius_pager.h"
+
+namespace relief::view {
+
+namespace {
+
+// Where the camera will be `frames` frames from now at its present motion.
+lod::Camera extrapolate(const lod::Camera& prev, const lod::Camera& now, double frames) {
+  auto step = [&](double a, double b, bool angle) {
+    const double d = angle ? std::remainder(b - a, 360.0) : b - a;
+    return b + d * frames;
+  };
+  lod::Camera c = now;
+  c.lon = std::remainder(step(prev.lon, now.lon, true), 360.0);
+  c.lat = std::clamp(step(prev.lat, now.lat, false), -89.9, 89.9);
+  c.height = std::max(now.height * 0.5, step(prev.height, now.height, false));
+  c.heading = std::remainder(step(prev.heading, now.heading, true), 360.0);
+  c.pitch = std::clamp(step(prev.pitch, now.pitch, false), -90.0, 90.0);
+  return c;
+}
+
+bool moved(const lod::Camera& a, const lod::Camera& b) {
+  return a.lon != b.lon || a.lat != b.lat || a.height != b.height || a.heading != b.heading ||
+         a.pitch != b.pitch;
+}
+
+}  // namespace
+
+struct Scene::Impl {
+  const tiles::Store& store;
+  const tiles::Store* imagery;
+  SceneOptions options;
+  const Clock& clock;
+  lod::MeshTopology mesh;
+  std::unique_ptr<stream::TileLoader> loader, imagery_loader;
+  std::unique_ptr<lod::TerrainModel> terrain;
+  std::unique_ptr<render::TerrainRenderer> renderer;
+  std::optional<lod::Camera> previous;  // of the last frame, unless cut
+  lod::Selection last;
+  uint64_t imagery_misses = 0;  // a frame that missed imagery is not complete
+
+  Impl(const tiles::Store& s, const tiles::Store* i, const SceneOptions& o, const Clock& c)
+      : store(s), imagery(i), options(o), clock(c), mesh(mesh_level(s, o)) {}
+
+  // The brute-force reference has one vertex per finest sample.
+  static int mesh_level(const tiles::Store& s, const SceneOptions& o) {
+    return o.full_resolution ? static_cast<int>(std::log2(s.grid().height())) : o.mesh_level;
+  }
+
+  Status prefetch_along_motion(const lod::Camera& camera) {
+    if (!loader || !options.prefetch || !previous) return {};
+    const bool jumped =
+        std::abs(camera.lon - previous->lon) + std::abs(camera.lat - previous->lat) > 1;
+    if (jumped || !moved(*previous, camera)) return {};
+    auto ahead = lod::make_view(extrapolate(*previous, camera, options.lookahead_frames));
+    if (!ahead) return {};  // extrapolated into the ground or past a pole: nothing to prefetch
+    loader->set_prefetch(true);
+    auto predicted = lod::select_quads(*ahead, *terrain, options.selection);
+    loader->set_prefetch(false);
+    if (!predicted) return std::unexpected(predicted.error());
+    return {};
+  }
+};
+
+Scene::Scene(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+Scene::~Scene() = default;
+
+Result<std::unique_ptr<Scene>> Scene::create(const tiles::Store& elevation,
+                                             const tiles::Store* imagery,
+                                             const SceneOptions& options, const Clock& clock) {
+  auto impl = std::make_unique<Impl>(elevation, imagery, options, clock);
+  if (options.interactive) {
+    stream::LoaderOptions lo = options.loader;
+    lo.clock = &clock;
+    impl->loader = RELIEF_TRY(stream::TileLoader::create(elevation, lo));
+    impl->terrain = std::make_unique<lod::TerrainModel>(elevation, impl->mesh, *impl->loader);
+    if (imagery) {
+      lo.memory_budget = options.imagery_budget;
+      impl->imagery_loader = RELIEF_TRY(stream::TileLoader::create(*imagery, lo));
+    }
+  } else {
+    impl->terrain =
+        std::make_unique<lod::TerrainModel>(&elevation, impl->mesh, options.loader.memory_budget);
+  }
+  impl->renderer = RELIEF_TRY(render::TerrainRenderer::create(
+      *impl->terrain, imagery, options.gpu_budget, impl->imagery_loader.get()));
+  return std::unique_ptr<Scene>(new Scene(std::move(impl)));
+}
+
+Result<FrameReport> Scene::draw(const lod::Camera& camera, render::RenderTarget& target) {
+  Impl& m = *impl_;
+  const lod::View view = RELIEF_TRY(lod::make_view(camera));
+  FrameReport report;
+  report.camera = camera;
+  const auto start = m.clock.now();
+  m.terrain->begin_frame();
+  lod::Selection selection = RELIEF_TRY(lod::select_quads(view, *m.terrain, m.options.selection));
+  RELIEF_CHECK(m.prefetch_along_motion(camera));
+  if (m.loader && m.options.radius_tiles > 0) {
+    m.loader->begin_frame();  // the pager's requests replace the view's
+    auto requested = stream::request_radius(*m.terrain, m.store, view.eye, m.options.radius_tiles);
+    if (!requested) return std::unexpected(requested.error());
+  }
+  m.terrain->end_frame();
+  if (m.imagery_loader) m.imagery_loader->begin_frame();  // the renderer requests imagery
+  auto frame = m.renderer->draw(view, selection, target, m.options.render);
+  if (m.imagery_loader) m.imagery_loader->end_frame();
+  report.draw = RELIEF_TRY(std::move(frame));
+  report.frame_seconds = seconds_between(start, m.clock.now());
+  report.cpu_seconds = report.frame_seconds - report.draw.gpu_seconds;
+  report.selection = selection.stats;
+  report.complete = selection.stats.waiting == 0;
+  if (m.imagery_loader) {
+    const stream::LoaderStats is = m.imagery_loader->stats();
+    report.complete =
+        report.complete && is.queued == 0 && is.in_flight == 0 && is.misses == m.imagery_misses;
+    m.imagery_misses = is.misses;
+  }
+  m.last = std::move(selection);
+  m.previous = camera;
+  return report;
+}
+
+void Scene::cut() {
+  impl_->previous.reset();
+}
+
+const SceneOptions& Scene::options() const {
+  return impl_->options;
+}
+lod::TerrainModel& Scene::terrain() {
+  return *impl_->terrain;
+}
+const lod::Selection& Scene::last_selection() const {
+  return impl_->last;
+}
+stream::TileLoader* Scene::elevation_loader() {
+  return impl_->loader.get();
+}
+stream::TileLoader* Scene::imagery_loader() {
+  return impl_->imagery_loader.get();
+}
+
+}  // namespace relief::view

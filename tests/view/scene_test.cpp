@@ -1,0 +1,123 @@
+// The frame loop as a library, stepped frame by frame on a ManualClock:
+// interactive frames never wait (the first draws level 0 only) and converge
+// to the complete frame of the same camera, pixel for pixel; a path plays one
+// frame per 1/fps of clock time, reports its cut and when the view after it
+// was complete.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <thread>
+
+#include "../ingest/built_stores.h"
+#include "relief/base/manual_clock.h"
+#include "relief/view/path_player.h"
+
+namespace relief::view {
+namespace {
+
+using namespace std::chrono_literals;
+
+const lod::Camera kOblique = lod::look_at(1.5, 42.5, 1500, 30000, 20, -35, 60, 160, 120);
+
+class SceneTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    auto context = render::GlContext::create_headless();
+    ASSERT_TRUE(context) << context.error().message;
+    context_ = std::move(*context);
+    auto target = render::make_offscreen_target(kOblique.width, kOblique.height_px);
+    ASSERT_TRUE(target) << target.error().message;
+    target_ = std::move(*target);
+  }
+
+  std::unique_ptr<Scene> scene(bool interactive) {
+    SceneOptions o;
+    o.interactive = interactive;
+    o.mesh_level = 3;
+    auto s = Scene::create(testing::pyrenees_store(), nullptr, o, clock_);
+    EXPECT_TRUE(s) << s.error().message;
+    return s ? std::move(*s) : nullptr;
+  }
+
+  static void wait_idle(Scene& s) {
+    for (int i = 0; i < 60000 && !s.elevation_loader()->idle(); ++i) {
+      std::this_thread::sleep_for(1ms);
+    }
+    ASSERT_TRUE(s.elevation_loader()->idle());
+  }
+
+  ManualClock clock_;
+  std::unique_ptr<render::GlContext> context_;
+  std::unique_ptr<render::RenderTarget> target_;
+};
+
+TEST_F(SceneTest, InteractiveFramesNeverWaitAndConvergeToTheCompleteFrame) {
+  auto complete = scene(false);
+  ASSERT_TRUE(complete);
+  auto still = complete->draw(kOblique, *target_);
+  ASSERT_TRUE(still) << still.error().message;
+  EXPECT_TRUE(still->complete);
+  const std::vector<uint8_t> expected = *target_->read_rgba();
+
+  auto live = scene(true);
+  ASSERT_TRUE(live);
+  auto first = live->draw(kOblique, *target_);
+  ASSERT_TRUE(first) << first.error().message;
+  EXPECT_FALSE(first->complete);  // only level 0 was resident: the rest was requested
+  EXPECT_GT(first->selection.waiting, 0u);
+  std::optional<FrameReport> last;
+  for (int frame = 0; frame < 64 && !(last && last->complete); ++frame) {
+    wait_idle(*live);
+    auto f = live->draw(kOblique, *target_);
+    ASSERT_TRUE(f) << f.error().message;
+    last = *f;
+  }
+  ASSERT_TRUE(last && last->complete);
+  EXPECT_EQ(*target_->read_rgba(), expected);
+  EXPECT_EQ(last->selection.quads, still->selection.quads);
+}
+
+TEST_F(SceneTest, APathPlaysOneFramePerPeriodOfTheClockAndReportsItsCut) {
+  auto live = scene(true);
+  ASSERT_TRUE(live);
+  lod::Camera far = kOblique;
+  far.lon += 0.3;
+  far.lat -= 0.2;
+  std::vector<lod::Keyframe> keys(3);
+  keys[0] = {0.0, kOblique, false};
+  keys[1] = {0.5, kOblique, false};
+  keys[2] = {0.55, far, true};
+  keys.push_back({1.0, far, false});
+  PathOptions o;
+  o.fps = 10;
+  o.until_complete = 30;
+  clock_.set_free(true);  // sleeps jump to their deadline: frames are 0.1 s apart exactly
+  std::vector<double> times;
+  PathCallbacks callbacks;
+  callbacks.frame_done = [&](const FrameRecord& r) -> Status {
+    times.push_back(r.time);
+    if (r.index >= 10) wait_idle(*live);  // after the path, let loads finish between frames
+    return {};
+  };
+  auto summary = play_path(*live, keys, 11, o, *target_, clock_, callbacks);
+  ASSERT_TRUE(summary) << summary.error().message;
+  ASSERT_GE(summary->frames, 11u);
+  for (size_t i = 0; i < times.size(); ++i) EXPECT_NEAR(times[i], 0.1 * i, 1e-9) << i;
+  ASSERT_EQ(summary->cuts.size(), 1u);
+  EXPECT_EQ(summary->cuts[0].frame, 6u);  // the first frame at t >= 0.55 s
+  EXPECT_TRUE(summary->complete);
+  ASSERT_TRUE(summary->cuts[0].complete_after_s);
+  EXPECT_GT(*summary->cuts[0].complete_after_s, 0.0);
+  EXPECT_GT(summary->drawn_bytes, 0u);
+  EXPECT_GE(summary->drawn_bytes, summary->final_view_bytes / 2);
+}
+
+TEST(Percentile, NearestRank) {
+  EXPECT_EQ(percentile({}, 0.5), 0.0);
+  EXPECT_EQ(percentile({3, 1, 2}, 0.5), 2.0);
+  EXPECT_EQ(percentile({3, 1, 2}, 0.0), 1.0);
+  EXPECT_EQ(percentile({3, 1, 2}, 1.0), 3.0);
+}
+
+}  // namespace
+}  // namespace relief::view
