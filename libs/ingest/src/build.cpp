@@ -47,7 +47,7 @@ Result<uint64_t> fill_voids_of_sources(const BuildOptions& o, std::vector<Source
   };
   std::vector<std::optional<Result<std::optional<FilledSource>>>> done(sources.size());
   executor.parallel_for(sources.size(), [&](size_t i) {
-    done[i] = fill_source_voids(sources[i].path, copy_path(i));
+    done[i] = fill_source_voids(sources[i].read_path(), copy_path(i));
   });
   uint64_t filled = 0;
   for (size_t i = 0; i < sources.size(); ++i) {
@@ -66,7 +66,7 @@ Result<uint64_t> fill_voids_of_sources(const BuildOptions& o, std::vector<Source
   }
   std::vector<std::optional<Result<std::optional<FilledSource>>>> copied(plain.size());
   executor.parallel_for(plain.size(), [&](size_t k) {
-    copied[k] = fill_source_voids(sources[plain[k]].path, copy_path(plain[k]), true);
+    copied[k] = fill_source_voids(sources[plain[k]].read_path(), copy_path(plain[k]), true);
   });
   for (size_t k = 0; k < plain.size(); ++k) {
     const std::optional<FilledSource> f = RELIEF_TRY(std::move(*copied[k]));

@@ -13,8 +13,9 @@ namespace relief::ingest {
 
 struct Source {
   std::string path;
-  std::string crs_wkt;   // as given, or from --src-crs
-  std::string crs_name;  // authority code when known, else WKT
+  std::string crs_wkt;       // as given, or from --src-crs
+  std::string crs_name;      // authority code when known, else WKT
+  bool crs_assumed = false;  // none given: WGS84 taken from a geographic extent
   int width = 0, height = 0;
   int colour_bands = 0;  // bands carried into the store (alpha excluded)
   bool has_alpha = false;
@@ -27,9 +28,14 @@ struct Source {
   geo::GeoBox box;         // lon/lat extent; east may exceed 180 if it crosses the antimeridian
   double spacing_deg = 0;  // sample spacing in degrees after reprojection
   std::string filled;      // a copy with its voids filled (--fill-voids), if any
+  // A global grid in longitudes 0..360: a VRT (XML text, which GDAL opens as
+  // a dataset) with its columns rotated into -180..180; empty otherwise.
+  std::string wrapped;
 
+  // The raster as it lies on the globe (void filling reads this one).
+  const std::string& read_path() const { return wrapped.empty() ? path : wrapped; }
   // The file the warper reads.
-  const std::string& open_path() const { return filled.empty() ? path : filled; }
+  const std::string& open_path() const { return filled.empty() ? read_path() : filled; }
 };
 
 // Opens `path` and checks that it can go into a dataset of `kind`.
