@@ -153,7 +153,8 @@ class GlTerrainRenderer final : public TerrainRenderer {
     glClearColor(o.sky[0], o.sky[1], o.sky[2], 1);
     glClearDepth(0);
     glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-    stats.draw_calls = issue(program_, view, selection, o);
+    bind(program_, view, o);
+    stats.draw_calls = multi_draw(selection);
     glFinish();
     stats.gpu_seconds = std::chrono::duration<double>(Clock::now() - gpu_start).count();
     if (auto e = gl_error(); !e.empty()) return fail("drawing: " + e);
@@ -172,11 +173,13 @@ class GlTerrainRenderer final : public TerrainRenderer {
     gl::Uploads ignored;
     std::vector<float> positions(stats.triangles * 9);
     out.write(positions.data(), bytes, ignored);
+    auto target = RELIEF_TRY(make_offscreen_target(1, 1));  // draws need a complete framebuffer
+    target->bind();
     glEnable(GL_RASTERIZER_DISCARD);
     glBindBufferRange(GL_TRANSFORM_FEEDBACK_BUFFER, 0, out.id(), 0, static_cast<GLsizeiptr>(bytes));
-    glUseProgram(capture_program_.id());
+    bind(capture_program_, view, o);
     glBeginTransformFeedback(GL_TRIANGLES);
-    issue(capture_program_, view, selection, o);
+    multi_draw(selection);
     glEndTransformFeedback();
     glDisable(GL_RASTERIZER_DISCARD);
     glGetNamedBufferSubData(out.id(), 0, static_cast<GLsizeiptr>(bytes), positions.data());
@@ -238,8 +241,9 @@ class GlTerrainRenderer final : public TerrainRenderer {
     }
     write_if_changed(records_buffer_, previous_records_, records_, uploads);
     write_if_changed(commands_buffer_, previous_commands_, commands_, uploads);
-    if (quad_ids_.size() < selection.quads.size()) {  // grows only
-      std::vector<uint32_t> ids(std::max<size_t>(selection.quads.size(), 2 * quad_ids_.size()));
+    const size_t ids_held = quad_ids_.size() / sizeof(uint32_t);
+    if (ids_held < selection.quads.size()) {  // grows only
+      std::vector<uint32_t> ids(std::max(selection.quads.size(), 2 * ids_held));
       std::iota(ids.begin(), ids.end(), 0u);
       quad_ids_ = gl::Buffer::make_static(ids.data(), ids.size() * sizeof(uint32_t), uploads);
     }
@@ -266,10 +270,8 @@ class GlTerrainRenderer final : public TerrainRenderer {
     return stats;
   }
 
-  // Binds everything prepare() made and draws it; returns the draw calls.
-  uint32_t issue(gl::Program& program, const lod::View& view, const lod::Selection& selection,
-                 const RenderOptions& o) {
-    if (selection.quads.empty()) return 0;
+  // Binds everything prepare() made.
+  void bind(gl::Program& program, const lod::View& view, const RenderOptions& o) {
     glUseProgram(program.id());
     glBindVertexArray(vao_.id());
     const bool refined = refined_k_ >= 0;
@@ -290,6 +292,11 @@ class GlTerrainRenderer final : public TerrainRenderer {
     glUniform1i(program.location("border"), elevation_.border());
     glUniform1i(program.location("imagery_border"), imagery_ ? imagery_->manifest().border : 0);
     glUniform1f(program.location("exaggeration"), o.exaggeration);
+  }
+
+  // Draws every quad prepare() made, one draw command each; returns the draw calls.
+  uint32_t multi_draw(const lod::Selection& selection) {
+    if (selection.quads.empty()) return 0;
     glMultiDrawElementsIndirect(GL_TRIANGLES, GL_UNSIGNED_INT, nullptr,
                                 static_cast<GLsizei>(selection.quads.size()), 0);
     return 1;
