@@ -407,3 +407,43 @@ TEST_F(PyreneesGeometry, StatisticsOfAKnownSelection) {
 
 }  // namespace
 }  // namespace relief::render
+
+namespace relief::render {
+namespace {
+
+TEST(GpuGeometry, MalformedRefinedMeshesAreErrorsNotDraws) {
+  gl();
+  const lod::MeshTopology mesh(2);
+  lod::TerrainModel bare(nullptr, mesh, 1 << 20);
+  auto renderer = TerrainRenderer::create(bare, nullptr);
+  ASSERT_TRUE(renderer);
+  auto target = make_offscreen_target(16, 16);
+  ASSERT_TRUE(target);
+  auto view = lod::make_view(lod::Camera{1.45, 42.55, 3600, 20, -50, 0, 60, 16, 16});
+  ASSERT_TRUE(view);
+  lod::Selection s;
+  s.quads.push_back({TileKey{0, 0, 0}});
+  auto expect_error = [&](const lod::RefinedMesh& r, const std::string& needle) {
+    auto f = (*renderer)->draw(*view, s, **target, {}, &r);
+    ASSERT_FALSE(f) << needle;
+    EXPECT_NE(f.error().message.find(needle), std::string::npos) << f.error().message;
+  };
+  lod::RefinedMesh r;
+  r.grid_k = 1;  // 5 x 3 vertices
+  expect_error(r, "0 quads for a selection of 1");
+  r.indices = {0, 5, 6};
+  r.quads = {{0, 3}};
+  ASSERT_TRUE((*renderer)->draw(*view, s, **target, {}, &r));
+  r.quads = {{1, 3}};
+  expect_error(r, "outside");
+  r.quads = {{0, 2}};
+  expect_error(r, "outside");
+  r.quads = {{0, 3}};
+  r.indices = {0, 5, 15};
+  expect_error(r, "vertex id past the 15");
+  r.grid_k = 40;
+  expect_error(r, "grid level 40");
+}
+
+}  // namespace
+}  // namespace relief::render

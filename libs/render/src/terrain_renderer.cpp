@@ -1,5 +1,6 @@
 #include "relief/render/terrain_renderer.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -192,10 +193,7 @@ class GlTerrainRenderer final : public TerrainRenderer {
   // what differs from the previous frame.
   Result<FrameStats> prepare(const lod::View& view, const lod::Selection& selection,
                              const lod::RefinedMesh* refined) {
-    if (refined && refined->quads.size() != selection.quads.size()) {
-      return fail(fmt::format("refined mesh: {} quads for a selection of {}", refined->quads.size(),
-                              selection.quads.size()));
-    }
+    if (refined) RELIEF_CHECK(check_refined(*refined, selection));
     FrameStats stats;
     gl::Uploads uploads;
     slots_.begin_frame();
@@ -268,6 +266,36 @@ class GlTerrainRenderer final : public TerrainRenderer {
     stats.uploads = static_cast<uint32_t>(slots_.uploads() - uploads_before);
     stats.gpu_evicted = static_cast<uint32_t>(slots_.evicted() - evicted_before);
     return stats;
+  }
+
+  // A refined mesh the GPU can draw without reading outside its buffers.
+  Status check_refined(const lod::RefinedMesh& r, const lod::Selection& selection) {
+    if (r.quads.size() != selection.quads.size()) {
+      return fail(fmt::format("refined mesh: {} quads for a selection of {}", r.quads.size(),
+                              selection.quads.size()));
+    }
+    if (r.grid_k < 0 || r.grid_k > kMaxGridK) {
+      return fail(fmt::format("refined mesh: grid level {} outside 0..{}", r.grid_k, kMaxGridK));
+    }
+    for (const lod::RefinedQuad& q : r.quads) {
+      if (q.index_count % 3 || q.first_index > r.indices.size() ||
+          q.index_count > r.indices.size() - q.first_index) {
+        return fail(fmt::format("refined mesh: indices [{}, +{}) of a quad outside 0..{}",
+                                q.first_index, q.index_count, r.indices.size()));
+      }
+    }
+    // Indices are checked when they change (they are uploaded then), or their grid.
+    const bool same = r.grid_k == refined_k_ &&
+                      previous_refined_indices_.size() == r.indices.size() &&
+                      std::memcmp(previous_refined_indices_.data(), r.indices.data(),
+                                  r.indices.size() * sizeof(uint32_t)) == 0;
+    const uint32_t vertices = r.grid_columns() * r.grid_rows();
+    if (!same && std::any_of(r.indices.begin(), r.indices.end(),
+                             [&](uint32_t i) { return i >= vertices; })) {
+      return fail(fmt::format("refined mesh: a vertex id past the {} of grid level {}", vertices,
+                              r.grid_k));
+    }
+    return {};
   }
 
   // Binds everything prepare() made.
@@ -349,6 +377,8 @@ class GlTerrainRenderer final : public TerrainRenderer {
     }
     return std::pair{w, layer};
   }
+
+  static constexpr int kMaxGridK = 11;  // 4097 x 2049 vertices per grid
 
   lod::TerrainModel& elevation_;
   const tiles::Store* imagery_;
