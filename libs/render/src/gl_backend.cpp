@@ -74,6 +74,18 @@ void TextureArray::upload(int layer, const void* pixels, Uploads& uploads) {
   uploads.textures += layer_bytes();
 }
 
+BufferTexture::BufferTexture() {
+  glCreateTextures(GL_TEXTURE_BUFFER, 1, &id_);
+}
+
+BufferTexture::~BufferTexture() {
+  glDeleteTextures(1, &id_);
+}
+
+void BufferTexture::attach(const Buffer& buffer) {
+  glTextureBuffer(id_, GL_RGBA32F, buffer.id());
+}
+
 VertexArray::VertexArray() {
   glCreateVertexArrays(1, &id_);
 }

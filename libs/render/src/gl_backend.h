@@ -73,6 +73,21 @@ class TextureArray {
   int width_ = 0, height_ = 0, layers_ = 0;
 };
 
+// A buffer texture (samplerBuffer) over a Buffer of RGBA32F texels.
+class BufferTexture {
+ public:
+  BufferTexture();
+  ~BufferTexture();
+  BufferTexture(const BufferTexture&) = delete;
+  BufferTexture& operator=(const BufferTexture&) = delete;
+  // Again after the buffer's storage is reallocated.
+  void attach(const Buffer& buffer);
+  GLuint id() const { return id_; }
+
+ private:
+  GLuint id_ = 0;
+};
+
 class VertexArray {
  public:
   VertexArray();

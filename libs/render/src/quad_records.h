@@ -1,6 +1,6 @@
 #pragma once
-// Per-quad records for the terrain vertex shader (shaders.h), in an SSBO
-// (std430): what a quad's vertices need besides quad-space (u, v). Only the
+// Per-quad records for the terrain vertex shader (shaders.h), 22 RGBA32F
+// texels each of a buffer texture: what a quad's vertices need besides quad-space (u, v). Only the
 // anchors depend on the eye; a view that does not change gives the same
 // records, which are then not uploaded again.
 #include <cstdint>
@@ -29,7 +29,7 @@ struct QuadRecord {
   uint32_t slots[4];  // layers of own heights, parent heights, imagery; QuadBits
   float shade[4];     // north-south sample spacing, metres; unused
 };
-static_assert(sizeof(QuadRecord) == 352, "std430 layout of the shader's Quad");
+static_assert(sizeof(QuadRecord) == 22 * 16, "the shader reads 22 texels per quad");
 
 class QuadRecords {
  public:

@@ -24,15 +24,16 @@ layout(location = 0) in vec2 uv;          // quad space
 layout(location = 1) in uint flags;       // side bits | corner bits << 4
 layout(location = 2) in uint quad_index;  // per draw (instanced: the draw's base instance)
 
-struct Quad {
-  vec4 anchor[8];  // xyz: corner minus the eye, metres; w: prime vertical radius there
-  vec4 trig[8];    // cos lat, sin lat, cos lon, sin lon of the corner
-  vec4 own_window, parent_window, imagery_window;  // x0, y0, width, height
-  vec4 size;       // width, height (degrees), north, south latitude
-  uvec4 slots;     // layers: own heights, parent heights, imagery; bits (quad_records.h)
-  vec4 shade;      // north-south sample spacing, metres
-};
-layout(std430, binding = 0) readonly buffer Quads { Quad quads[]; };
+// The quad's record (quad_records.h), 22 texels of a buffer texture:
+// anchor[8] (xyz: corner minus the eye, metres; w: prime vertical radius
+// there), trig[8] (cos lat, sin lat, cos lon, sin lon of the corner), own,
+// parent and imagery windows (x0, y0, width, height), size (width, height in
+// degrees, north, south latitude), slots (layers of own heights, parent
+// heights, imagery; bits), shade (north-south sample spacing, metres). A
+// buffer texture rather than a storage buffer: llvmpipe gathers its texels
+// eight vertices at a time.
+uniform samplerBuffer records;
+vec4 record(int i) { return texelFetch(records, int(quad_index) * 22 + i); }
 
 uniform mat4 view_projection;
 uniform sampler2DArray heights;
@@ -74,7 +75,8 @@ float bilinear(int layer, vec2 p) {
 }
 
 void main() {
-  uint bits = quads[quad_index].slots.w;
+  uvec4 slots = floatBitsToUint(record(20));
+  uint bits = slots.w;
   uint coarse_sides = (bits >> 4) & 15u, coarse_corners = (bits >> 8) & 15u;
   bool parent = ((flags & 15u) & coarse_sides) != 0u || (((flags >> 4) & 15u) & coarse_corners) != 0u;
 
@@ -90,12 +92,12 @@ void main() {
   ivec2 a = ivec2(p.x == 1.0 ? 1 : 0, p.y == 1.0 ? 1 : 0);
   int corner = first + a.y * 2 + a.x;
   vec2 d = p - vec2(a);
-  vec4 size = quads[quad_index].size;
+  vec4 size = record(19);
   float lam = d.x * (scale * size.x) * kDeg;
   float phi = -(d.y * (scale * size.y)) * kDeg;
 
-  vec4 anchor = quads[quad_index].anchor[corner];
-  vec4 t = quads[quad_index].trig[corner];
+  vec4 anchor = record(corner);
+  vec4 t = record(8 + corner);
   float cpa = t.x, spa = t.y, cla = t.z, sla = t.w;
   float s_l = sin_rel(lam), h_l = sin_rel(0.5 * lam), s_p = sin_rel(phi), h_p = sin_rel(0.5 * phi);
   float vers_l = 2.0 * h_l * h_l, vers_p = 2.0 * h_p * h_p;  // 1 - cos
@@ -114,23 +116,22 @@ void main() {
                      (1.0 - kE2) * (dn * sp + na * dsp));
   vec3 up = vec3(cp * cl, cp * sl, sp);
 
-  vec4 own_window = quads[quad_index].own_window;
-  uvec4 slots = quads[quad_index].slots;
+  vec4 own_window = record(16);
   float h = 0.0;
   if (parent) {
-    vec4 w = quads[quad_index].parent_window;
+    vec4 w = record(17);
     if ((bits & 2u) != 0u) h = bilinear(int(slots.y), w.xy + uv * w.zw);
   } else if ((bits & 1u) != 0u) {
     h = bilinear(int(slots.x), own_window.xy + uv * own_window.zw);
   }
-  vec4 iw = quads[quad_index].imagery_window;
+  vec4 iw = record(18);
   sample_position = own_window.xy + uv * own_window.zw;
   imagery_position = iw.xy + uv * iw.zw;
   height = h;
   cos_lat = cos(radians(mix(size.z, size.w, uv.y)));
   layers = ivec2(slots.xz);
   has = bits & 5u;
-  sample_metres = quads[quad_index].shade.x;
+  sample_metres = record(21).x;
   vec3 position = anchor.xyz + offset + up * (h * exaggeration);
   captured_position = position;
   gl_Position = view_projection * vec4(position, 1.0);

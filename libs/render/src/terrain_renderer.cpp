@@ -85,23 +85,28 @@ std::vector<GridVertex> refined_grid(int k) {
   return out;
 }
 
-// Rewrites `buffer` with `data` unless it holds it already (`previous`).
+// Rewrites `buffer` with `data` unless it holds it already (`previous`);
+// returns true when the buffer's storage was reallocated.
 template <typename T>
-void write_if_changed(gl::Buffer& buffer, std::vector<T>& previous, const std::vector<T>& data,
+bool write_if_changed(gl::Buffer& buffer, std::vector<T>& previous, const std::vector<T>& data,
                       gl::Uploads& uploads) {
   if (buffer.id() && previous.size() == data.size() &&
       std::memcmp(previous.data(), data.data(), data.size() * sizeof(T)) == 0) {
-    return;
+    return false;
   }
-  buffer.write(data.data(), data.size() * sizeof(T), uploads);
   previous = data;
+  return buffer.write(data.data(), data.size() * sizeof(T), uploads);
 }
 
 class GlTerrainRenderer final : public TerrainRenderer {
  public:
   GlTerrainRenderer(lod::TerrainModel& elevation, const tiles::Store* imagery,
-                    lod::TileProvider* imagery_tiles, uint64_t gpu_budget, int max_layers)
-      : elevation_(elevation), imagery_(imagery), slots_(gpu_budget, max_layers) {
+                    lod::TileProvider* imagery_tiles, uint64_t gpu_budget, int max_layers,
+                    size_t max_quads)
+      : elevation_(elevation),
+        imagery_(imagery),
+        max_quads_(max_quads),
+        slots_(gpu_budget, max_layers) {
     if (imagery_ && !imagery_tiles) {  // a still: read when needed
       owned_imagery_tiles_ = lod::blocking_provider(*imagery_, uint64_t{256} << 20);
       imagery_tiles = owned_imagery_tiles_.get();
@@ -193,6 +198,11 @@ class GlTerrainRenderer final : public TerrainRenderer {
   // what differs from the previous frame.
   Result<FrameStats> prepare(const lod::View& view, const lod::Selection& selection,
                              const lod::RefinedMesh* refined) {
+    if (selection.quads.size() > max_quads_) {
+      return fail(
+          fmt::format("{} quads in a frame, more than the {} the GPU's buffer textures hold",
+                      selection.quads.size(), max_quads_));
+    }
     if (refined) RELIEF_CHECK(check_refined(*refined, selection));
     FrameStats stats;
     gl::Uploads uploads;
@@ -237,7 +247,9 @@ class GlTerrainRenderer final : public TerrainRenderer {
       commands_.push_back(c);
       stats.triangles += c.count / 3;
     }
-    write_if_changed(records_buffer_, previous_records_, records_, uploads);
+    if (write_if_changed(records_buffer_, previous_records_, records_, uploads)) {
+      records_texture_.attach(records_buffer_);
+    }
     write_if_changed(commands_buffer_, previous_commands_, commands_, uploads);
     const size_t ids_held = quad_ids_.size() / sizeof(uint32_t);
     if (ids_held < selection.quads.size()) {  // grows only
@@ -308,7 +320,7 @@ class GlTerrainRenderer final : public TerrainRenderer {
                               sizeof(GridVertex));
     glVertexArrayVertexBuffer(vao_.id(), 1, quad_ids_.id(), 0, sizeof(uint32_t));
     glVertexArrayElementBuffer(vao_.id(), refined ? refined_indices_.id() : mesh_indices_.id());
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, records_buffer_.id());
+    glBindTextureUnit(2, records_texture_.id());
     glBindBuffer(GL_DRAW_INDIRECT_BUFFER, commands_buffer_.id());
     glBindTextureUnit(0, slots_.heights().layers() ? slots_.heights().id() : empty_heights_.id());
     glBindTextureUnit(1, slots_.imagery().layers() ? slots_.imagery().id() : empty_imagery_.id());
@@ -317,6 +329,7 @@ class GlTerrainRenderer final : public TerrainRenderer {
     glUniformMatrix4fv(program.location("view_projection"), 1, GL_FALSE, vp);
     glUniform1i(program.location("heights"), 0);
     glUniform1i(program.location("imagery"), 1);
+    glUniform1i(program.location("records"), 2);
     glUniform1i(program.location("border"), elevation_.border());
     glUniform1i(program.location("imagery_border"), imagery_ ? imagery_->manifest().border : 0);
     glUniform1f(program.location("exaggeration"), o.exaggeration);
@@ -384,11 +397,13 @@ class GlTerrainRenderer final : public TerrainRenderer {
   const tiles::Store* imagery_;
   std::unique_ptr<lod::TileProvider> owned_imagery_tiles_;
   lod::TileProvider* imagery_tiles_ = nullptr;
+  size_t max_quads_;  // records in a buffer texture
   gl::Program program_, capture_program_;
   gl::VertexArray vao_;
   gl::Buffer mesh_vertices_, mesh_indices_, quad_ids_;
   std::map<int, gl::Buffer> grids_;  // refined meshes' vertex grids, by k
   gl::Buffer records_buffer_, commands_buffer_, refined_indices_;
+  gl::BufferTexture records_texture_;
   std::vector<QuadRecord> records_, previous_records_;
   std::vector<DrawCommand> commands_, previous_commands_;
   std::vector<uint32_t> previous_refined_indices_;
@@ -408,10 +423,12 @@ Result<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(lod::TerrainMod
   if (imagery && imagery->manifest().sample_type != tiles::SampleType::UInt8) {
     return fail(imagery->root().string() + ": --imagery needs an imagery store (RGBA tiles)");
   }
-  GLint max_layers = 0;
+  GLint max_layers = 0, max_texels = 0;
   glGetIntegerv(GL_MAX_ARRAY_TEXTURE_LAYERS, &max_layers);
-  auto r = std::make_unique<GlTerrainRenderer>(elevation, imagery, imagery_tiles, gpu_budget,
-                                               std::max(max_layers, 1));
+  glGetIntegerv(GL_MAX_TEXTURE_BUFFER_SIZE, &max_texels);
+  auto r = std::make_unique<GlTerrainRenderer>(
+      elevation, imagery, imagery_tiles, gpu_budget, std::max(max_layers, 1),
+      static_cast<size_t>(std::max(max_texels, 0)) * 16 / sizeof(QuadRecord));
   RELIEF_CHECK(r->init());
   return std::unique_ptr<TerrainRenderer>(std::move(r));
 }
