@@ -17,6 +17,7 @@
 #include "relief/lod/selection.h"
 #include "relief/render/terrain_renderer.h"
 #include "terrain_capture.h"
+#include "tile_slots.h"
 
 namespace relief::render {
 namespace {
@@ -443,6 +444,53 @@ TEST(GpuGeometry, MalformedRefinedMeshesAreErrorsNotDraws) {
   expect_error(r, "vertex id past the 15");
   r.grid_k = 40;
   expect_error(r, "grid level 40");
+}
+
+}  // namespace
+}  // namespace relief::render
+
+namespace relief::render {
+namespace {
+
+// The GPU cache (L3) as texture-array layers: within its budget least
+// recently used first out, layers reused, the frame's tiles pinned.
+TEST(TileSlots, EvictsTheLeastRecentlyUsedAndReusesTheirLayers) {
+  gl();
+  const std::vector<float> pixels(4 * 4, 1.0f);  // 64-byte tiles
+  TileSlots slots(3 * 64, 4);
+  gl::Uploads uploads;
+  auto key = [](uint32_t x) { return TextureKey{TileKey{5, x, 0}, false}; };
+  slots.begin_frame();
+  for (uint32_t x = 0; x < 3; ++x) ASSERT_TRUE(slots.insert(key(x), 4, 4, pixels.data(), uploads));
+  EXPECT_EQ(slots.used_bytes(), 3u * 64);
+  EXPECT_EQ(uploads.textures, 3u * 64);
+  EXPECT_EQ(slots.heights().layers(), 4);  // as many as the budget holds, at most the GL limit
+  slots.begin_frame();
+  ASSERT_TRUE(slots.find(key(0)));  // pinned, most recent
+  const int layer1 = *slots.find(key(1));
+  slots.begin_frame();
+  ASSERT_TRUE(slots.find(key(0)));
+  ASSERT_TRUE(slots.insert(key(3), 4, 4, pixels.data(), uploads));  // evicts 2, the oldest
+  ASSERT_TRUE(slots.insert(key(4), 4, 4, pixels.data(), uploads));  // evicts 1
+  EXPECT_FALSE(slots.find(key(1)));
+  EXPECT_FALSE(slots.find(key(2)));
+  EXPECT_EQ(slots.evicted(), 2u);
+  EXPECT_EQ(slots.count(), 3u);
+  EXPECT_LE(slots.used_bytes(), slots.budget_bytes());
+  // Evicted layers are reused: nothing grew.
+  EXPECT_EQ(slots.heights().layers(), 4);
+  EXPECT_TRUE(*slots.find(key(3)) == layer1 || *slots.find(key(4)) == layer1);
+  // Tiles of another size, and more pinned tiles than layers, are errors.
+  const std::vector<float> big(8 * 8, 0.0f);
+  auto wrong = slots.insert(key(9), 8, 8, big.data(), uploads);
+  ASSERT_FALSE(wrong);
+  EXPECT_NE(wrong.error().message.find("8x8, the store's others 4x4"), std::string::npos);
+  slots.begin_frame();
+  for (uint32_t x = 10; x < 14; ++x)
+    ASSERT_TRUE(slots.insert(key(x), 4, 4, pixels.data(), uploads));
+  auto full = slots.insert(key(14), 4, 4, pixels.data(), uploads);
+  ASSERT_FALSE(full);
+  EXPECT_NE(full.error().message.find("more than 4 elevation tiles"), std::string::npos);
 }
 
 }  // namespace
