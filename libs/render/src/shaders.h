@@ -177,11 +177,12 @@ void main() {
   vec3 sun = normalize(vec3(-1.0, 1.0, 1.414));
   float shade = clamp(dot(n, sun), 0.0, 1.0);
   // Where the imagery has no data (alpha 0) the terrain shows its own colours
-  // (imagery colours are premultiplied by alpha). Sampled everywhere (the
-  // derivatives of texture() need uniform control), used where there is imagery.
-  vec4 sampled = texture(imagery, vec3((imagery_position + float(imagery_border)) /
-                                           vec2(textureSize(imagery, 0).xy), float(layers.y)));
-  vec4 drape = (has & 4u) != 0u ? sampled : vec4(0.0);
+  // (imagery colours are premultiplied by alpha). Derivatives taken in uniform
+  // control, the texture read only where there is imagery.
+  vec2 st = (imagery_position + float(imagery_border)) / vec2(textureSize(imagery, 0).xy);
+  vec2 st_dx = dFdx(st), st_dy = dFdy(st);
+  vec4 drape = vec4(0.0);
+  if ((has & 4u) != 0u) drape = textureGrad(imagery, vec3(st, float(layers.y)), st_dx, st_dy);
   vec3 base = hypsometric(height) * (1.0 - drape.a) + drape.rgb;
   float light = mix(0.35 + 0.65 * shade, 0.75 + 0.25 * shade, drape.a);
   colour = vec4(base * light, 1.0);
