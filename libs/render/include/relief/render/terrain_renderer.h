@@ -7,8 +7,8 @@
 // double on the CPU, its data windows and texture layers), and the data tiles
 // as layers of texture arrays under the GPU budget (L3). The vertex shader
 // builds each position relative to a corner of its quad in float and samples
-// its height; all quads go in a few multi-draw-indirect calls. A view that
-// does not change uploads nothing. Reversed-Z depth with an infinite far
+// its height; all quads go in one multi-draw-indirect call. A view that does
+// not change uploads nothing. Reversed-Z depth with an infinite far
 // plane.
 //
 // Uses the GL context current on the calling thread; call from that thread only.
