@@ -91,7 +91,15 @@ nlohmann::json stats_json(const lod::Selection& s, const render::FrameStats& f) 
   return {{"quads", s.stats.quads},
           {"quads_per_level", levels},
           {"triangles", f.triangles},
+          {"triangles_per_pixel", f.triangles_per_pixel()},
           {"draw_calls", f.draw_calls},
+          {"uploaded_bytes", {{"geometry", f.geometry_bytes}, {"textures", f.texture_bytes}}},
+          {"gpu",
+           {{"textures", f.gpu_textures},
+            {"bytes", f.gpu_bytes},
+            {"slots", f.gpu_slots},
+            {"allocated_bytes", f.gpu_allocated_bytes},
+            {"budget_bytes", f.gpu_budget}}},
           {"culled_quads", s.stats.culled},
           {"selection_ms", s.stats.seconds * 1e3},
           {"prepare_ms", f.prepare_seconds * 1e3},
@@ -142,10 +150,12 @@ int render_still(const Args& args, RenderSetup& setup) {
       return report_error(st.error().message);
     }
   }
-  std::printf("wrote %s: %dx%d, %u quads, %llu triangles, selection %.2f ms, gpu %.1f ms\n",
-              out.c_str(), setup.width, setup.height, frame->selection.quads,
-              static_cast<unsigned long long>(frame->draw.triangles),
-              frame->selection.seconds * 1e3, frame->draw.gpu_seconds * 1e3);
+  std::printf(
+      "wrote %s: %dx%d, %u quads, %llu triangles (%.2f per pixel), %u draw calls, "
+      "selection %.2f ms, gpu %.1f ms\n",
+      out.c_str(), setup.width, setup.height, frame->selection.quads,
+      static_cast<unsigned long long>(frame->draw.triangles), frame->draw.triangles_per_pixel(),
+      frame->draw.draw_calls, frame->selection.seconds * 1e3, frame->draw.gpu_seconds * 1e3);
   return 0;
 }
 

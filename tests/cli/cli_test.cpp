@@ -110,15 +110,22 @@ TEST(Cli, BadInputsNameTheFile) {
   fs::remove(png + ".aux.xml");
   expect_one_line_error(build({png}, "imagery"), "no georeferencing");
 
-  // A world file but no CRS: refused with a hint, accepted with --src-crs.
-  const std::string jpg = (dir / "globe.png").string();
+  // A world file in metres but no CRS: refused with a hint, accepted with
+  // --src-crs. (One whose extent can only be degrees is taken as WGS84.)
+  const std::string jpg = (dir / "utm.png").string();
   fs::copy_file(png, jpg);
-  std::ofstream(dir / "globe.pgw") << "22.5\n0\n0\n-11.25\n-168.75\n84.375\n";
+  std::ofstream(dir / "utm.pgw") << "30\n0\n0\n-30\n500015\n4649985\n";
   expect_one_line_error(build({jpg}, "imagery"), "--src-crs");
-  auto ok = build({jpg}, "imagery", {"--src-crs", "EPSG:4326", "-q"});
+  auto ok = build({jpg}, "imagery", {"--src-crs", "EPSG:32631", "-q"});
   EXPECT_EQ(ok.exit_code, 0) << ok.err;
   fs::remove_all(out);
   expect_one_line_error(build({jpg}, "imagery", {"--src-crs", "EPSG:999999"}), "--src-crs");
+  const std::string globe = (dir / "globe.png").string();
+  fs::copy_file(png, globe);
+  std::ofstream(dir / "globe.pgw") << "22.5\n0\n0\n-11.25\n-168.75\n84.375\n";
+  auto assumed = build({globe}, "imagery", {"-q"});
+  EXPECT_EQ(assumed.exit_code, 0) << assumed.err;
+  fs::remove_all(out);
 
   // Complex samples (an SLC-like product).
   const std::string complex = (dir / "slc.tif").string();

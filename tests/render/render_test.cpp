@@ -151,12 +151,44 @@ TEST(Render, StatisticsDescribeTheFrame) {
   std::ifstream in(stats);
   const auto j = nlohmann::json::parse(in);
   EXPECT_GT(j["quads"].get<int>(), 10);
-  EXPECT_EQ(j["draw_calls"], j["quads"]);
+  // Every quad in one multi-draw; its tiles uploaded once (a still: one frame).
+  EXPECT_EQ(j["draw_calls"], 1);
   EXPECT_GT(j["triangles"].get<int64_t>(), 0);
+  EXPECT_DOUBLE_EQ(j["triangles_per_pixel"].get<double>(),
+                   j["triangles"].get<double>() / (200.0 * 150.0));
+  EXPECT_GT(j["uploaded_bytes"]["geometry"].get<int64_t>(), 0);
+  EXPECT_EQ(j["uploaded_bytes"]["textures"], j["gpu"]["bytes"]);
+  EXPECT_GE(j["gpu"]["slots"].get<int>(), j["gpu"]["textures"].get<int>());
   EXPECT_LE(j["max_error_pixels"].get<double>(), 1.0);
   int sum = 0;
   for (const auto& [level, n] : j["quads_per_level"].items()) sum += n.get<int>();
   EXPECT_EQ(sum, j["quads"].get<int>());
+}
+
+// A path that holds one view, complete frames: the first uploads the tiles
+// and the geometry, the next ones nothing; every frame is one draw call.
+TEST(Render, AStaticViewUploadsNothingAfterItsFirstCompleteFrame) {
+  ScratchDir dir("render_static_path");
+  const fs::path path = dir / "p.json", stats = dir / "s.json";
+  const std::string camera = "[1.45, 42.55, 3600, 20, -50, 0]";
+  std::ofstream(path) << "{\"fps\": 10, \"keyframes\": [{\"time\": 0, \"camera\": " << camera
+                      << "}, {\"time\": 0.3, \"camera\": " << camera << "}]}";
+  auto r = run_relief({"render", Stores::pyrenees().string(), "--path", path.string(), "-o",
+                       (dir / "frames").string(), "--size", "120x90", "--mode", "complete",
+                       "--stats", stats.string(), "--no-frames"},
+                      kNoMesaLeakReport);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::ifstream in(stats);
+  const auto frames = nlohmann::json::parse(in)["frames"];
+  ASSERT_GE(frames.size(), 3u);
+  EXPECT_GT(frames[0]["uploaded_bytes"]["geometry"].get<int64_t>(), 0);
+  EXPECT_GT(frames[0]["uploaded_bytes"]["textures"].get<int64_t>(), 0);
+  for (size_t i = 0; i < frames.size(); ++i) {
+    EXPECT_EQ(frames[i]["draw_calls"], 1) << i;
+    if (i == 0) continue;
+    EXPECT_EQ(frames[i]["uploaded_bytes"]["geometry"], 0) << i;
+    EXPECT_EQ(frames[i]["uploaded_bytes"]["textures"], 0) << i;
+  }
 }
 
 TEST(Render, BadInputIsAOneLineError) {

@@ -5,12 +5,8 @@
 
 #include <string>
 
-#include "relief/base/result.h"
-
 namespace relief::render {
 
-// Compiles and links a program; errors carry the GLSL log.
-Result<GLuint> link_program(const char* vertex_source, const char* fragment_source);
 // The first GL error since the last call, as a message, or empty.
 std::string gl_error();
 

@@ -72,49 +72,4 @@ std::string gl_error() {
   return e == GL_NO_ERROR ? std::string() : fmt::format("GL error 0x{:x}", e);
 }
 
-namespace {
-// The compile or link log of a shader or program.
-std::string info_log(GLuint id, bool program) {
-  char log[4096] = {};
-  if (program) {
-    glGetProgramInfoLog(id, sizeof log, nullptr, log);
-  } else {
-    glGetShaderInfoLog(id, sizeof log, nullptr, log);
-  }
-  return log;
-}
-}  // namespace
-
-Result<GLuint> link_program(const char* vertex_source, const char* fragment_source) {
-  auto compile = [](GLenum type, const char* source) -> Result<GLuint> {
-    const GLuint s = glCreateShader(type);
-    glShaderSource(s, 1, &source, nullptr);
-    glCompileShader(s);
-    GLint ok = 0;
-    glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
-    if (!ok) {
-      const std::string log = info_log(s, false);
-      glDeleteShader(s);
-      return fail("GLSL: " + log);
-    }
-    return s;
-  };
-  const GLuint vs = RELIEF_TRY(compile(GL_VERTEX_SHADER, vertex_source));
-  const GLuint fs = RELIEF_TRY(compile(GL_FRAGMENT_SHADER, fragment_source));
-  const GLuint p = glCreateProgram();
-  glAttachShader(p, vs);
-  glAttachShader(p, fs);
-  glLinkProgram(p);
-  glDeleteShader(vs);
-  glDeleteShader(fs);
-  GLint ok = 0;
-  glGetProgramiv(p, GL_LINK_STATUS, &ok);
-  if (!ok) {
-    const std::string log = info_log(p, true);
-    glDeleteProgram(p);
-    return fail("GLSL link: " + log);
-  }
-  return p;
-}
-
 }  // namespace relief::render

@@ -1,54 +1,140 @@
 #pragma once
+// GLSL of the terrain: every vertex built on the GPU from quad-space (u, v),
+// its quad's record (quad_records.h) and the height sampled from the quad's
+// elevation tile; nothing per vertex is computed on the CPU.
 
 namespace relief::render {
 
+// Positions. A vertex is its anchor (a corner known in double on the CPU,
+// minus the eye, as float) plus its offset from the anchor computed in float
+// with differences of angles (sin and 1 - cos = 2 sin^2(x/2) of the angle
+// differences): errors stay relative to the quad's size at any distance from
+// the origin. The anchor is the corner at or north-west of the vertex on the
+// lattice of the coarsest quad sharing the vertex (the parent's for vertices on
+// a side or corner shared with a coarser quad), and the offset is an exact
+// multiple of that lattice's spacing: every quad sharing a vertex computes it
+// from the same floats with the same operations, so shared vertices are
+// bit-identical.
+//
 // Heights: bilinear between the four samples around a point given in interior
 // sample coordinates, with texelFetch so every quad sharing a vertex computes
 // the same value from the same samples with the same weights.
 inline constexpr const char* kTerrainVertexShader = R"(#version 450 core
-layout(location = 0) in vec3 rel_position;  // ellipsoid point minus the eye, metres
-layout(location = 1) in vec3 up;            // geodetic normal
-layout(location = 2) in vec2 uv;            // quad space
-layout(location = 3) in uint flags;         // side bits | corner bits << 4
+layout(location = 0) in vec2 uv;          // quad space
+layout(location = 1) in uint flags;       // side bits | corner bits << 4
+layout(location = 2) in uint quad_index;  // per draw (instanced: the draw's base instance)
+
+// The quad's record (quad_records.h), 22 texels of a buffer texture:
+// anchor[8] (xyz: corner minus the eye, metres; w: prime vertical radius
+// there), trig[8] (cos lat, sin lat, cos lon, sin lon of the corner), own,
+// parent and imagery windows (x0, y0, width, height), size (width, height in
+// degrees, north, south latitude), slots (layers of own heights, parent
+// heights, imagery; bits), shade (north-south sample spacing, metres). A
+// buffer texture rather than a storage buffer: llvmpipe gathers its texels
+// eight vertices at a time.
+uniform samplerBuffer records;
+vec4 record(int i) { return texelFetch(records, int(quad_index) * 22 + i); }
 
 uniform mat4 view_projection;
-uniform sampler2D own_heights, parent_heights;
-uniform vec4 own_window, parent_window, imagery_window;  // x0, y0, width, height
-uniform int border, has_own, has_parent;
-uniform uint coarse_sides, coarse_corners;
+uniform sampler2DArray heights;
+uniform int border;
 uniform float exaggeration;
-uniform vec2 lat_range;  // north, south, degrees
 
 out vec2 sample_position;
 out vec2 imagery_position;
 out float height;
 out float cos_lat;
+flat out ivec2 layers;  // own heights, imagery
+flat out uint has;      // 1: own heights, 4: imagery
+flat out float sample_metres;
+out vec3 captured_position;  // tests: relative to the eye, with the height
 
-float bilinear(sampler2D t, vec2 p) {
+const float kA = 6378137.0, kE2 = 6.69437999014e-3, kDeg = 0.017453292519943295;
+
+// sin with a small relative error for small angles too (GLSL's sin promises
+// an absolute error only).
+float sin_rel(float x) {
+  if (abs(x) > 0.25) return sin(x);
+  float x2 = x * x;
+  return x * (1.0 - x2 / 6.0 * (1.0 - x2 / 20.0 * (1.0 - x2 / 42.0 * (1.0 - x2 / 72.0))));
+}
+
+float bilinear(int layer, vec2 p) {
   vec2 s = p - 0.5 + float(border);
   vec2 i0 = floor(s);
   vec2 f = s - i0;
-  ivec2 size = textureSize(t, 0) - 1;
+  ivec2 size = textureSize(heights, 0).xy - 1;
   ivec2 a = clamp(ivec2(i0), ivec2(0), size), b = min(a + 1, size);
-  float top = texelFetch(t, a, 0).r + (texelFetch(t, ivec2(b.x, a.y), 0).r - texelFetch(t, a, 0).r) * f.x;
-  float bottom = texelFetch(t, ivec2(a.x, b.y), 0).r +
-                 (texelFetch(t, b, 0).r - texelFetch(t, ivec2(a.x, b.y), 0).r) * f.x;
+  float t00 = texelFetch(heights, ivec3(a, layer), 0).r;
+  float t10 = texelFetch(heights, ivec3(b.x, a.y, layer), 0).r;
+  float t01 = texelFetch(heights, ivec3(a.x, b.y, layer), 0).r;
+  float t11 = texelFetch(heights, ivec3(b, layer), 0).r;
+  float top = t00 + (t10 - t00) * f.x;
+  float bottom = t01 + (t11 - t01) * f.x;
   return top + (bottom - top) * f.y;
 }
 
 void main() {
+  uvec4 slots = floatBitsToUint(record(20));
+  uint bits = slots.w;
+  uint coarse_sides = (bits >> 4) & 15u, coarse_corners = (bits >> 8) & 15u;
   bool parent = ((flags & 15u) & coarse_sides) != 0u || (((flags >> 4) & 15u) & coarse_corners) != 0u;
+
+  // The anchor and the offset from it, in degrees (exact).
+  vec2 p = uv;
+  float scale = 1.0;
+  int first = 0;
+  if (parent) {
+    p = (vec2(float((bits >> 12) & 1u), float((bits >> 13) & 1u)) + uv) * 0.5;
+    scale = 2.0;
+    first = 4;
+  }
+  ivec2 a = ivec2(p.x == 1.0 ? 1 : 0, p.y == 1.0 ? 1 : 0);
+  int corner = first + a.y * 2 + a.x;
+  vec2 d = p - vec2(a);
+  vec4 size = record(19);
+  float lam = d.x * (scale * size.x) * kDeg;
+  float phi = -(d.y * (scale * size.y)) * kDeg;
+
+  vec4 anchor = record(corner);
+  vec4 t = record(8 + corner);
+  float cpa = t.x, spa = t.y, cla = t.z, sla = t.w;
+  float s_l = sin_rel(lam), h_l = sin_rel(0.5 * lam), s_p = sin_rel(phi), h_p = sin_rel(0.5 * phi);
+  float vers_l = 2.0 * h_l * h_l, vers_p = 2.0 * h_p * h_p;  // 1 - cos
+  float dcp = -cpa * vers_p - spa * s_p;  // cos lat - cos lat(anchor)
+  float dsp = -spa * vers_p + cpa * s_p;
+  float dcl = -cla * vers_l - sla * s_l;
+  float dsl = -sla * vers_l + cla * s_l;
+  float cp = cpa + dcp, sp = spa + dsp, cl = cla + dcl, sl = sla + dsl;
+  // N - N(anchor) with N = a / sqrt(1 - e2 sin^2 lat), without cancellation.
+  float wa = 1.0 - kE2 * spa * spa, dw = kE2 * dsp * (2.0 * spa + dsp);
+  float sw = sqrt(wa - dw), swa = sqrt(wa);
+  float dn = kA * dw / (sw * swa * (sw + swa));
+  float na = anchor.w;
+  float dr = dn * cp + na * dcp;  // N cos lat - its value at the anchor
+  vec3 offset = vec3(dr * cl + na * cpa * dcl, dr * sl + na * cpa * dsl,
+                     (1.0 - kE2) * (dn * sp + na * dsp));
+  vec3 up = vec3(cp * cl, cp * sl, sp);
+
+  vec4 own_window = record(16);
   float h = 0.0;
   if (parent) {
-    if (has_parent != 0) h = bilinear(parent_heights, parent_window.xy + uv * parent_window.zw);
-  } else if (has_own != 0) {
-    h = bilinear(own_heights, own_window.xy + uv * own_window.zw);
+    vec4 w = record(17);
+    if ((bits & 2u) != 0u) h = bilinear(int(slots.y), w.xy + uv * w.zw);
+  } else if ((bits & 1u) != 0u) {
+    h = bilinear(int(slots.x), own_window.xy + uv * own_window.zw);
   }
+  vec4 iw = record(18);
   sample_position = own_window.xy + uv * own_window.zw;
-  imagery_position = imagery_window.xy + uv * imagery_window.zw;
+  imagery_position = iw.xy + uv * iw.zw;
   height = h;
-  cos_lat = cos(radians(mix(lat_range.x, lat_range.y, uv.y)));
-  gl_Position = view_projection * vec4(rel_position + up * (h * exaggeration), 1.0);
+  cos_lat = cos(radians(mix(size.z, size.w, uv.y)));
+  layers = ivec2(slots.xz);
+  has = bits & 5u;
+  sample_metres = record(21).x;
+  vec3 position = anchor.xyz + offset + up * (h * exaggeration);
+  captured_position = position;
+  gl_Position = view_projection * vec4(position, 1.0);
 }
 )";
 
@@ -57,14 +143,18 @@ in vec2 sample_position;
 in vec2 imagery_position;
 in float height;
 in float cos_lat;
-uniform sampler2D own_heights, imagery;
-uniform int border, has_own, has_imagery, imagery_border;
-uniform float sample_metres;  // north-south sample spacing, metres
+flat in ivec2 layers;
+flat in uint has;
+flat in float sample_metres;
+uniform sampler2DArray heights, imagery;
+uniform int border, imagery_border;
 uniform float exaggeration;
 out vec4 colour;
 
 float h_at(vec2 p) {
-  return has_own != 0 ? textureLod(own_heights, (p + float(border)) / vec2(textureSize(own_heights, 0)), 0.0).r : 0.0;
+  return (has & 1u) != 0u
+             ? textureLod(heights, vec3((p + float(border)) / vec2(textureSize(heights, 0).xy), float(layers.x)), 0.0).r
+             : 0.0;
 }
 
 vec3 hypsometric(float h) {
@@ -87,10 +177,12 @@ void main() {
   vec3 sun = normalize(vec3(-1.0, 1.0, 1.414));
   float shade = clamp(dot(n, sun), 0.0, 1.0);
   // Where the imagery has no data (alpha 0) the terrain shows its own colours
-  // (imagery colours are premultiplied by alpha).
-  vec4 drape = has_imagery != 0
-                   ? texture(imagery, (imagery_position + float(imagery_border)) / vec2(textureSize(imagery, 0)))
-                   : vec4(0.0);
+  // (imagery colours are premultiplied by alpha). Derivatives taken in uniform
+  // control, the texture read only where there is imagery.
+  vec2 st = (imagery_position + float(imagery_border)) / vec2(textureSize(imagery, 0).xy);
+  vec2 st_dx = dFdx(st), st_dy = dFdy(st);
+  vec4 drape = vec4(0.0);
+  if ((has & 4u) != 0u) drape = textureGrad(imagery, vec3(st, float(layers.y)), st_dx, st_dy);
   vec3 base = hypsometric(height) * (1.0 - drape.a) + drape.rgb;
   float light = mix(0.35 + 0.65 * shade, 0.75 + 0.25 * shade, drape.a);
   colour = vec4(base * light, 1.0);

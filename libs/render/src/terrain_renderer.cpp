@@ -1,14 +1,19 @@
 #include "relief/render/terrain_renderer.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <unordered_map>
+#include <cstring>
+#include <map>
+#include <numeric>
 
 #include <fmt/format.h>
 
-#include "gl.h"
+#include "gl_backend.h"
+#include "quad_records.h"
 #include "shaders.h"
-#include "texture_cache.h"
+#include "terrain_capture.h"
+#include "tile_slots.h"
 
 namespace relief::render {
 namespace {
@@ -16,11 +21,14 @@ namespace {
 using geo::TileKey;
 using Clock = std::chrono::steady_clock;
 
-struct Vertex {
-  float rel[3];
-  float up[3];
-  float uv[2];
-  uint32_t flags;
+// Quad space and side/corner flags of a vertex: all a vertex holds.
+struct GridVertex {
+  float u, v;
+  uint32_t flags;  // Side bits | Corner bits << 4
+};
+
+struct DrawCommand {  // glMultiDrawElementsIndirect's
+  uint32_t count, instance_count, first_index, base_vertex, base_instance;
 };
 
 // Rotation-only view (the eye is the origin) times a reversed-Z projection
@@ -50,110 +58,95 @@ void view_projection(const lod::View& v, float out[16]) {
   }
 }
 
-// A linear-filtered, edge-clamped 2-D texture holding `pixels`.
-GLuint make_texture(GLenum internal_format, int w, int h, GLenum format, GLenum type,
-                    const void* pixels) {
-  GLuint t = 0;
-  glCreateTextures(GL_TEXTURE_2D, 1, &t);
-  glTextureStorage2D(t, 1, internal_format, w, h);
-  glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-  glTextureSubImage2D(t, 0, 0, 0, w, h, format, type, pixels);
-  glTextureParameteri(t, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-  glTextureParameteri(t, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-  glTextureParameteri(t, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-  glTextureParameteri(t, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-  return t;
+uint32_t vertex_flags(uint8_t sides, uint8_t corner) {
+  return static_cast<uint32_t>(sides) | static_cast<uint32_t>(corner) << 4;
+}
+
+// The vertex grid of refined meshes at level k (lod/refined_mesh.h).
+std::vector<GridVertex> refined_grid(int k) {
+  const uint32_t nx = 2u << k, ny = 1u << k;
+  std::vector<GridVertex> out;
+  out.reserve(static_cast<size_t>(nx + 1) * (ny + 1));
+  for (uint32_t j = 0; j <= ny; ++j) {
+    for (uint32_t i = 0; i <= nx; ++i) {
+      uint8_t s = 0, c = 0;
+      if (i == 0) s |= lod::kWest;
+      if (i == nx) s |= lod::kEast;
+      if (j == 0) s |= lod::kNorth;
+      if (j == ny) s |= lod::kSouth;
+      if ((s & lod::kNorth) && (s & lod::kWest)) c = lod::kNorthWest;
+      if ((s & lod::kNorth) && (s & lod::kEast)) c = lod::kNorthEast;
+      if ((s & lod::kSouth) && (s & lod::kWest)) c = lod::kSouthWest;
+      if ((s & lod::kSouth) && (s & lod::kEast)) c = lod::kSouthEast;
+      out.push_back({static_cast<float>(i) / static_cast<float>(nx),
+                     static_cast<float>(j) / static_cast<float>(ny), vertex_flags(s, c)});
+    }
+  }
+  return out;
+}
+
+// Rewrites `buffer` with `data` unless it holds it already (`previous`);
+// returns true when the buffer's storage was reallocated.
+template <typename T>
+bool write_if_changed(gl::Buffer& buffer, std::vector<T>& previous, const std::vector<T>& data,
+                      gl::Uploads& uploads) {
+  if (buffer.id() && previous.size() == data.size() &&
+      std::memcmp(previous.data(), data.data(), data.size() * sizeof(T)) == 0) {
+    return false;
+  }
+  previous = data;
+  return buffer.write(data.data(), data.size() * sizeof(T), uploads);
 }
 
 class GlTerrainRenderer final : public TerrainRenderer {
  public:
   GlTerrainRenderer(lod::TerrainModel& elevation, const tiles::Store* imagery,
-                    lod::TileProvider* imagery_tiles, uint64_t gpu_budget)
-      : elevation_(elevation), imagery_(imagery), textures_(gpu_budget) {
+                    lod::TileProvider* imagery_tiles, uint64_t gpu_budget, int max_layers,
+                    size_t max_quads)
+      : elevation_(elevation),
+        imagery_(imagery),
+        max_quads_(max_quads),
+        slots_(gpu_budget, max_layers) {
     if (imagery_ && !imagery_tiles) {  // a still: read when needed
       owned_imagery_tiles_ = lod::blocking_provider(*imagery_, uint64_t{256} << 20);
       imagery_tiles = owned_imagery_tiles_.get();
     }
     imagery_tiles_ = imagery_tiles;
   }
-  ~GlTerrainRenderer() override {
-    glDeleteTextures(1, &zero_texture_);
-    glDeleteBuffers(1, &vertex_buffer_);
-    glDeleteBuffers(1, &index_buffer_);
-    glDeleteVertexArrays(1, &vao_);
-    glDeleteProgram(program_);
-  }
 
   Status init() {
-    program_ = RELIEF_TRY(link_program(kTerrainVertexShader, kTerrainFragmentShader));
+    program_ = RELIEF_TRY(gl::Program::link(kTerrainVertexShader, kTerrainFragmentShader));
     const lod::MeshTopology& mesh = elevation_.mesh();
-    glCreateVertexArrays(1, &vao_);
-    glCreateBuffers(1, &index_buffer_);
-    glNamedBufferStorage(index_buffer_, mesh.indices().size() * sizeof(uint32_t),
-                         mesh.indices().data(), 0);
-    glVertexArrayElementBuffer(vao_, index_buffer_);
-    glCreateBuffers(1, &vertex_buffer_);
-    glVertexArrayVertexBuffer(vao_, 0, vertex_buffer_, 0, sizeof(Vertex));
-    auto attribute = [&](GLuint index, GLint count, GLenum type, size_t offset) {
-      glEnableVertexArrayAttrib(vao_, index);
-      if (type == GL_UNSIGNED_INT) {
-        glVertexArrayAttribIFormat(vao_, index, count, type, static_cast<GLuint>(offset));
-      } else {
-        glVertexArrayAttribFormat(vao_, index, count, type, GL_FALSE, static_cast<GLuint>(offset));
-      }
-      glVertexArrayAttribBinding(vao_, index, 0);
-    };
-    attribute(0, 3, GL_FLOAT, offsetof(Vertex, rel));
-    attribute(1, 3, GL_FLOAT, offsetof(Vertex, up));
-    attribute(2, 2, GL_FLOAT, offsetof(Vertex, uv));
-    attribute(3, 1, GL_UNSIGNED_INT, offsetof(Vertex, flags));
-    const float zero = 0;
-    zero_texture_ = make_texture(GL_R32F, 1, 1, GL_RED, GL_FLOAT, &zero);
+    std::vector<GridVertex> vertices;
+    for (const lod::MeshVertex& v : mesh.vertices())
+      vertices.push_back({v.u, v.v, vertex_flags(v.sides, v.corner)});
+    gl::Uploads setup;
+    mesh_vertices_ =
+        gl::Buffer::make_static(vertices.data(), vertices.size() * sizeof(GridVertex), setup);
+    mesh_indices_ = gl::Buffer::make_static(mesh.indices().data(),
+                                            mesh.indices().size() * sizeof(uint32_t), setup);
+    vao_.attribute(0, 0, 2, GL_FLOAT, offsetof(GridVertex, u));
+    vao_.attribute(1, 0, 1, GL_UNSIGNED_INT, offsetof(GridVertex, flags));
+    vao_.attribute(2, 1, 1, GL_UNSIGNED_INT, 0);
+    glVertexArrayBindingDivisor(vao_.id(), 1, 1);
+    // Bound where a kind has no tiles yet.
+    const float zero[4] = {};
+    for (gl::TextureArray* a : {&empty_heights_, &empty_imagery_}) {
+      a->set_layer_size(1, 1);
+      a->reserve(1);
+      a->upload(0, zero, setup);
+    }
     if (auto e = gl_error(); !e.empty()) return fail("renderer setup: " + e);
     return {};
   }
 
   Result<FrameStats> draw(const lod::View& view, const lod::Selection& selection,
-                          RenderTarget& target, const RenderOptions& o) override {
+                          RenderTarget& target, const RenderOptions& o,
+                          const lod::RefinedMesh* refined) override {
     const auto start = Clock::now();
-    FrameStats stats;
-    textures_.begin_frame();
-    const uint64_t uploads_before = textures_.uploads(), evicted_before = textures_.evicted();
-    const lod::MeshTopology& mesh = elevation_.mesh();
-    const size_t per_quad = mesh.vertices().size();
-    // Vertices go to the GPU in batches of whole quads, at most kBatchVertices
-    // at a time, so a frame of any size fits in bounded memory.
-    const size_t batch_quads = std::max<size_t>(1, kBatchVertices / per_quad);
-    const size_t bytes = std::min(selection.quads.size(), batch_quads) * per_quad * sizeof(Vertex);
-    if (bytes > vertex_capacity_) {
-      glDeleteBuffers(1, &vertex_buffer_);
-      glCreateBuffers(1, &vertex_buffer_);
-      glNamedBufferStorage(vertex_buffer_, static_cast<GLsizeiptr>(bytes), nullptr,
-                           GL_DYNAMIC_STORAGE_BIT);
-      glVertexArrayVertexBuffer(vao_, 0, vertex_buffer_, 0, sizeof(Vertex));
-      vertex_capacity_ = bytes;
-    }
-    // Textures of every quad before the first draw call (a complete frame).
-    struct QuadTextures {
-      GLuint own, parent, imagery;
-      lod::DataWindow own_window, parent_window, imagery_window;
-    };
-    std::vector<QuadTextures> textures;
-    for (const auto& q : selection.quads) {
-      QuadTextures t;
-      t.own_window = elevation_.window(q.key);
-      t.parent_window = elevation_.parent_window(q.key);
-      t.own = RELIEF_TRY(height_texture(t.own_window.tile));
-      t.parent = RELIEF_TRY(height_texture(t.parent_window.tile));
-      std::tie(t.imagery_window, t.imagery) = RELIEF_TRY(imagery_for(q));
-      textures.push_back(t);
-    }
+    FrameStats stats = RELIEF_TRY(prepare(view, selection, refined));
     stats.prepare_seconds = std::chrono::duration<double>(Clock::now() - start).count();
-    stats.gpu_textures = static_cast<uint32_t>(textures_.count());
-    stats.gpu_bytes = textures_.used_bytes();
-    stats.gpu_budget = textures_.budget_bytes();
-    stats.uploads = static_cast<uint32_t>(textures_.uploads() - uploads_before);
-    stats.gpu_evicted = static_cast<uint32_t>(textures_.evicted() - evicted_before);
+    stats.pixels = static_cast<uint64_t>(target.width()) * static_cast<uint64_t>(target.height());
 
     const auto gpu_start = Clock::now();
     target.bind();
@@ -166,135 +159,225 @@ class GlTerrainRenderer final : public TerrainRenderer {
     glClearColor(o.sky[0], o.sky[1], o.sky[2], 1);
     glClearDepth(0);
     glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-    glUseProgram(program_);
-    glBindVertexArray(vao_);
-    float vp[16];
-    view_projection(view, vp);
-    glUniformMatrix4fv(location("view_projection"), 1, GL_FALSE, vp);
-    glUniform1i(location("own_heights"), 0);
-    glUniform1i(location("parent_heights"), 1);
-    glUniform1i(location("imagery"), 2);
-    glUniform1i(location("border"), elevation_.border());
-    glUniform1i(location("imagery_border"), imagery_ ? imagery_->manifest().border : 0);
-    glUniform1f(location("exaggeration"), o.exaggeration);
-    double fill_seconds = 0;
-    for (size_t q = 0; q < selection.quads.size(); ++q) {
-      if (q % batch_quads == 0) {
-        const auto fill_start = Clock::now();
-        upload_vertices(view, selection, q, std::min(selection.quads.size(), q + batch_quads));
-        fill_seconds += std::chrono::duration<double>(Clock::now() - fill_start).count();
-      }
-      const lod::SelectedQuad& quad = selection.quads[q];
-      const QuadTextures& t = textures[q];
-      const geo::GeoBox b = quad.key.bounds();
-      glBindTextureUnit(0, t.own);
-      glBindTextureUnit(1, t.parent);
-      glBindTextureUnit(2, t.imagery ? t.imagery : zero_texture_);
-      auto window = [&](const char* name, const lod::DataWindow& w) {
-        glUniform4f(location(name), static_cast<float>(w.x0), static_cast<float>(w.y0),
-                    static_cast<float>(w.width), static_cast<float>(w.height));
-      };
-      window("own_window", t.own_window);
-      window("parent_window", t.parent_window);
-      window("imagery_window", t.imagery_window);
-      glUniform1i(location("has_own"), t.own_window.tile ? 1 : 0);
-      glUniform1i(location("has_parent"), t.parent_window.tile ? 1 : 0);
-      glUniform1i(location("has_imagery"), t.imagery ? 1 : 0);
-      glUniform1ui(location("coarse_sides"), quad.coarse_sides);
-      glUniform1ui(location("coarse_corners"), quad.coarse_corners);
-      glUniform2f(location("lat_range"), static_cast<float>(b.north), static_cast<float>(b.south));
-      // North-south spacing of the data tile's samples (the quad's, or its ancestor's).
-      const double quad_samples = t.own_window.height, spacing_deg = b.height() / quad_samples;
-      glUniform1f(location("sample_metres"),
-                  static_cast<float>(spacing_deg * 3.14159265358979323846 / 180 * 6371000.0));
-      glDrawElementsBaseVertex(
-          GL_TRIANGLES, static_cast<GLsizei>(mesh.index_count(quad.finer_sides)), GL_UNSIGNED_INT,
-          reinterpret_cast<const void*>(static_cast<uintptr_t>(mesh.first_index(quad.finer_sides)) *
-                                        sizeof(uint32_t)),
-          static_cast<GLint>((q % batch_quads) * per_quad));
-      ++stats.draw_calls;
-      stats.triangles += mesh.triangle_count(quad.finer_sides);
-    }
+    bind(program_, view, o);
+    stats.draw_calls = multi_draw(selection);
     glFinish();
-    stats.gpu_seconds =
-        std::chrono::duration<double>(Clock::now() - gpu_start).count() - fill_seconds;
-    stats.prepare_seconds += fill_seconds;
+    stats.gpu_seconds = std::chrono::duration<double>(Clock::now() - gpu_start).count();
     if (auto e = gl_error(); !e.empty()) return fail("drawing: " + e);
     return stats;
   }
 
- private:
-  static constexpr size_t kBatchVertices = size_t{1} << 21;  // 64 MiB of vertices
+  Result<std::vector<float>> capture(const lod::View& view, const lod::Selection& selection,
+                                     const RenderOptions& o, const lod::RefinedMesh* refined) {
+    const FrameStats stats = RELIEF_TRY(prepare(view, selection, refined));
+    if (!capture_program_.id()) {
+      capture_program_ = RELIEF_TRY(
+          gl::Program::link(kTerrainVertexShader, kTerrainFragmentShader, {"captured_position"}));
+    }
+    const size_t bytes = stats.triangles * 3 * 3 * sizeof(float);
+    gl::Buffer out;
+    gl::Uploads ignored;
+    std::vector<float> positions(stats.triangles * 9);
+    out.write(positions.data(), bytes, ignored);
+    auto target = RELIEF_TRY(make_offscreen_target(1, 1));  // draws need a complete framebuffer
+    target->bind();
+    glEnable(GL_RASTERIZER_DISCARD);
+    glBindBufferRange(GL_TRANSFORM_FEEDBACK_BUFFER, 0, out.id(), 0, static_cast<GLsizeiptr>(bytes));
+    bind(capture_program_, view, o);
+    glBeginTransformFeedback(GL_TRIANGLES);
+    multi_draw(selection);
+    glEndTransformFeedback();
+    glDisable(GL_RASTERIZER_DISCARD);
+    glGetNamedBufferSubData(out.id(), 0, static_cast<GLsizeiptr>(bytes), positions.data());
+    if (auto e = gl_error(); !e.empty()) return fail("capturing: " + e);
+    return positions;
+  }
 
-  // Vertices of quads [first, last) relative to the eye: double until after
-  // the subtraction, then float.
-  void upload_vertices(const lod::View& view, const lod::Selection& selection, size_t first,
-                       size_t last) {
+ private:
+  // Records, draw commands and textures of a frame, on the GPU; uploads only
+  // what differs from the previous frame.
+  Result<FrameStats> prepare(const lod::View& view, const lod::Selection& selection,
+                             const lod::RefinedMesh* refined) {
+    if (selection.quads.size() > max_quads_) {
+      return fail(
+          fmt::format("{} quads in a frame, more than the {} the GPU's buffer textures hold",
+                      selection.quads.size(), max_quads_));
+    }
+    if (refined) RELIEF_CHECK(check_refined(*refined, selection));
+    FrameStats stats;
+    gl::Uploads uploads;
+    slots_.begin_frame();
+    const uint64_t uploads_before = slots_.uploads(), evicted_before = slots_.evicted();
     const lod::MeshTopology& mesh = elevation_.mesh();
-    const size_t per_quad = mesh.vertices().size();
-    staging_.resize(per_quad * (last - first));
-    for (size_t q = first; q < last; ++q) {
-      const geo::GeoBox b = selection.quads[q].key.bounds();
-      for (size_t i = 0; i < per_quad; ++i) {
-        const lod::MeshVertex& mv = mesh.vertices()[i];
-        const double lon = b.west + mv.u * b.width(), lat = b.north - mv.v * b.height();
-        const lod::Vec3 p = lod::ecef(lon, lat, 0) - view.eye, up = lod::up_at(lon, lat);
-        Vertex& v = staging_[(q - first) * per_quad + i];
-        v.rel[0] = static_cast<float>(p.x), v.rel[1] = static_cast<float>(p.y),
-        v.rel[2] = static_cast<float>(p.z);
-        v.up[0] = static_cast<float>(up.x), v.up[1] = static_cast<float>(up.y),
-        v.up[2] = static_cast<float>(up.z);
-        v.uv[0] = mv.u, v.uv[1] = mv.v;
-        v.flags = static_cast<uint32_t>(mv.sides) | static_cast<uint32_t>(mv.corner) << 4;
+    records_.clear();
+    commands_.clear();
+    for (size_t q = 0; q < selection.quads.size(); ++q) {
+      const lod::SelectedQuad& quad = selection.quads[q];
+      QuadRecord r = record_maker_.make(quad, view.eye);
+      const lod::DataWindow own = elevation_.window(quad.key),
+                            parent = elevation_.parent_window(quad.key);
+      if (auto layer = RELIEF_TRY(height_layer(own.tile, uploads))) {
+        r.slots[0] = static_cast<uint32_t>(*layer), r.slots[3] |= kHasOwn;
+      }
+      if (auto layer = RELIEF_TRY(height_layer(parent.tile, uploads))) {
+        r.slots[1] = static_cast<uint32_t>(*layer), r.slots[3] |= kHasParent;
+      }
+      const auto [imagery_window, imagery_layer] = RELIEF_TRY(imagery_for(quad, uploads));
+      if (imagery_layer)
+        r.slots[2] = static_cast<uint32_t>(*imagery_layer), r.slots[3] |= kHasImagery;
+      auto window = [](float out[4], const lod::DataWindow& w) {
+        out[0] = static_cast<float>(w.x0), out[1] = static_cast<float>(w.y0);
+        out[2] = static_cast<float>(w.width), out[3] = static_cast<float>(w.height);
+      };
+      window(r.own_window, own);
+      window(r.parent_window, parent);
+      window(r.imagery_window, imagery_window);
+      // North-south spacing of the data tile's samples (the quad's, or its ancestor's).
+      const double spacing_deg = quad.key.bounds().height() / own.height;
+      r.shade[0] = static_cast<float>(spacing_deg * 3.14159265358979323846 / 180 * 6371000.0);
+      records_.push_back(r);
+      DrawCommand c{0, 1, 0, 0, static_cast<uint32_t>(q)};
+      if (refined) {
+        c.count = refined->quads[q].index_count;
+        c.first_index = refined->quads[q].first_index;
+      } else {
+        c.count = mesh.index_count(quad.finer_sides);
+        c.first_index = mesh.first_index(quad.finer_sides);
+      }
+      commands_.push_back(c);
+      stats.triangles += c.count / 3;
+    }
+    if (write_if_changed(records_buffer_, previous_records_, records_, uploads)) {
+      records_texture_.attach(records_buffer_);
+    }
+    write_if_changed(commands_buffer_, previous_commands_, commands_, uploads);
+    const size_t ids_held = quad_ids_.size() / sizeof(uint32_t);
+    if (ids_held < selection.quads.size()) {  // grows only
+      std::vector<uint32_t> ids(std::max(selection.quads.size(), 2 * ids_held));
+      std::iota(ids.begin(), ids.end(), 0u);
+      quad_ids_ = gl::Buffer::make_static(ids.data(), ids.size() * sizeof(uint32_t), uploads);
+    }
+    if (refined) {
+      auto [grid, fresh] = grids_.try_emplace(refined->grid_k);
+      if (fresh) {
+        const std::vector<GridVertex> v = refined_grid(refined->grid_k);
+        grid->second = gl::Buffer::make_static(v.data(), v.size() * sizeof(GridVertex), uploads);
+      }
+      write_if_changed(refined_indices_, previous_refined_indices_, refined->indices, uploads);
+    }
+    refined_k_ = refined ? refined->grid_k : -1;
+
+    stats.quads = static_cast<uint32_t>(selection.quads.size());
+    stats.geometry_bytes = uploads.geometry;
+    stats.texture_bytes = uploads.textures;
+    stats.gpu_textures = static_cast<uint32_t>(slots_.count());
+    stats.gpu_bytes = slots_.used_bytes();
+    stats.gpu_budget = slots_.budget_bytes();
+    stats.gpu_slots = static_cast<uint32_t>(slots_.slots());
+    stats.gpu_allocated_bytes = slots_.allocated_bytes();
+    stats.uploads = static_cast<uint32_t>(slots_.uploads() - uploads_before);
+    stats.gpu_evicted = static_cast<uint32_t>(slots_.evicted() - evicted_before);
+    return stats;
+  }
+
+  // A refined mesh the GPU can draw without reading outside its buffers.
+  Status check_refined(const lod::RefinedMesh& r, const lod::Selection& selection) {
+    if (r.quads.size() != selection.quads.size()) {
+      return fail(fmt::format("refined mesh: {} quads for a selection of {}", r.quads.size(),
+                              selection.quads.size()));
+    }
+    if (r.grid_k < 0 || r.grid_k > kMaxGridK) {
+      return fail(fmt::format("refined mesh: grid level {} outside 0..{}", r.grid_k, kMaxGridK));
+    }
+    for (const lod::RefinedQuad& q : r.quads) {
+      if (q.index_count % 3 || q.first_index > r.indices.size() ||
+          q.index_count > r.indices.size() - q.first_index) {
+        return fail(fmt::format("refined mesh: indices [{}, +{}) of a quad outside 0..{}",
+                                q.first_index, q.index_count, r.indices.size()));
       }
     }
-    glNamedBufferSubData(vertex_buffer_, 0,
-                         static_cast<GLsizeiptr>(staging_.size() * sizeof(Vertex)),
-                         staging_.data());
+    // Indices are checked when they change (they are uploaded then), or their grid.
+    const bool same = r.grid_k == refined_k_ &&
+                      previous_refined_indices_.size() == r.indices.size() &&
+                      std::memcmp(previous_refined_indices_.data(), r.indices.data(),
+                                  r.indices.size() * sizeof(uint32_t)) == 0;
+    const uint32_t vertices = r.grid_columns() * r.grid_rows();
+    if (!same && std::any_of(r.indices.begin(), r.indices.end(),
+                             [&](uint32_t i) { return i >= vertices; })) {
+      return fail(fmt::format("refined mesh: a vertex id past the {} of grid level {}", vertices,
+                              r.grid_k));
+    }
+    return {};
   }
 
-  GLint location(const char* name) {
-    auto it = locations_.find(name);
-    if (it == locations_.end())
-      it = locations_.emplace(name, glGetUniformLocation(program_, name)).first;
-    return it->second;
+  // Binds everything prepare() made.
+  void bind(gl::Program& program, const lod::View& view, const RenderOptions& o) {
+    glUseProgram(program.id());
+    glBindVertexArray(vao_.id());
+    const bool refined = refined_k_ >= 0;
+    glVertexArrayVertexBuffer(vao_.id(), 0,
+                              refined ? grids_.at(refined_k_).id() : mesh_vertices_.id(), 0,
+                              sizeof(GridVertex));
+    glVertexArrayVertexBuffer(vao_.id(), 1, quad_ids_.id(), 0, sizeof(uint32_t));
+    glVertexArrayElementBuffer(vao_.id(), refined ? refined_indices_.id() : mesh_indices_.id());
+    glBindTextureUnit(2, records_texture_.id());
+    glBindBuffer(GL_DRAW_INDIRECT_BUFFER, commands_buffer_.id());
+    glBindTextureUnit(0, slots_.heights().layers() ? slots_.heights().id() : empty_heights_.id());
+    glBindTextureUnit(1, slots_.imagery().layers() ? slots_.imagery().id() : empty_imagery_.id());
+    float vp[16];
+    view_projection(view, vp);
+    glUniformMatrix4fv(program.location("view_projection"), 1, GL_FALSE, vp);
+    glUniform1i(program.location("heights"), 0);
+    glUniform1i(program.location("imagery"), 1);
+    glUniform1i(program.location("records"), 2);
+    glUniform1i(program.location("border"), elevation_.border());
+    glUniform1i(program.location("imagery_border"), imagery_ ? imagery_->manifest().border : 0);
+    glUniform1f(program.location("exaggeration"), o.exaggeration);
   }
 
-  Result<GLuint> height_texture(const std::optional<TileKey>& key) {
-    if (!key) return zero_texture_;
-    if (auto t = textures_.find({*key, false})) return *t;
+  // Draws every quad prepare() made, one draw command each; returns the draw calls.
+  uint32_t multi_draw(const lod::Selection& selection) {
+    if (selection.quads.empty()) return 0;
+    glMultiDrawElementsIndirect(GL_TRIANGLES, GL_UNSIGNED_INT, nullptr,
+                                static_cast<GLsizei>(selection.quads.size()), 0);
+    return 1;
+  }
+
+  // The texture layer of an elevation tile, uploaded when it arrives;
+  // nullopt where there is no data.
+  Result<std::optional<int>> height_layer(const std::optional<TileKey>& key, gl::Uploads& uploads) {
+    if (!key) return std::optional<int>();
+    if (auto layer = slots_.find({*key, false})) return layer;
     const lod::TerrainModel::TilePtr tile = RELIEF_TRY(elevation_.tile(*key));
-    if (!tile) return zero_texture_;
-    const GLuint t =
-        make_texture(GL_R32F, tile->width(), tile->height(), GL_RED, GL_FLOAT, tile->f32().data());
-    textures_.insert({*key, false}, t, tile->byte_size());
-    return t;
+    if (!tile) return std::optional<int>();
+    return std::optional<int>(RELIEF_TRY(
+        slots_.insert({*key, false}, tile->width(), tile->height(), tile->f32().data(), uploads)));
   }
 
-  // The imagery of a quad: the texture of the imagery tile at the quad's
-  // level (or the imagery's finest), else of its nearest ancestor whose
-  // texture or decoded tile is at hand (non-blocking providers: the wanted
-  // tile is requested meanwhile). Colour has no cracks to fear, so any
-  // ancestor will do.
-  Result<std::pair<lod::DataWindow, GLuint>> imagery_for(const lod::SelectedQuad& quad) {
+  // The imagery of a quad: the layer of the imagery tile at the quad's level
+  // (or the imagery's finest), else of its nearest ancestor whose texture or
+  // decoded tile is at hand (non-blocking providers: the wanted tile is
+  // requested meanwhile). Colour has no cracks to fear, so any ancestor will do.
+  Result<std::pair<lod::DataWindow, std::optional<int>>> imagery_for(const lod::SelectedQuad& quad,
+                                                                     gl::Uploads& uploads) {
     lod::DataWindow w;
-    if (!imagery_) return std::pair{w, GLuint{0}};
+    std::optional<int> layer;
+    if (!imagery_) return std::pair{w, layer};
     const TileKey& key = quad.key;
     const int finest = std::min(key.level, imagery_->manifest().max_level);
-    GLuint texture = 0;
     int m = key.level - finest;
     for (TileKey a{finest, key.x >> m, key.y >> m};; a = *a.parent(), ++m) {
       if (imagery_->has_tile(a)) {
-        if (auto t = textures_.find({a, true})) {
-          texture = *t;
+        if (auto l = slots_.find({a, true})) {
+          layer = l;
         } else if (const lod::TilePtr tile = RELIEF_TRY(imagery_tiles_->get(a))) {
-          texture = make_texture(GL_RGBA8, tile->width(), tile->height(), GL_RGBA, GL_UNSIGNED_BYTE,
-                                 tile->u8().data());  // premultiplied by decode_tile
-          textures_.insert({a, true}, texture, tile->byte_size());
+          // premultiplied by decode_tile
+          layer = RELIEF_TRY(
+              slots_.insert({a, true}, tile->width(), tile->height(), tile->u8().data(), uploads));
         } else if (a.level == finest) {
           imagery_tiles_->request(a, quad.priority);
         }
-        if (texture) {
+        if (layer) {
           w.tile = a;
           w.width = std::ldexp(imagery_->grid().width(), -m);
           w.height = std::ldexp(imagery_->grid().height(), -m);
@@ -305,18 +388,30 @@ class GlTerrainRenderer final : public TerrainRenderer {
       }
       if (a.level == 0) break;
     }
-    return std::pair{w, texture};
+    return std::pair{w, layer};
   }
+
+  static constexpr int kMaxGridK = 11;  // 4097 x 2049 vertices per grid
 
   lod::TerrainModel& elevation_;
   const tiles::Store* imagery_;
   std::unique_ptr<lod::TileProvider> owned_imagery_tiles_;
   lod::TileProvider* imagery_tiles_ = nullptr;
-  GLuint program_ = 0, vao_ = 0, vertex_buffer_ = 0, index_buffer_ = 0, zero_texture_ = 0;
-  size_t vertex_capacity_ = 0;
-  std::vector<Vertex> staging_;
-  std::unordered_map<std::string, GLint> locations_;
-  TextureCache textures_;
+  size_t max_quads_;  // records in a buffer texture
+  gl::Program program_, capture_program_;
+  gl::VertexArray vao_;
+  gl::Buffer mesh_vertices_, mesh_indices_, quad_ids_;
+  std::map<int, gl::Buffer> grids_;  // refined meshes' vertex grids, by k
+  gl::Buffer records_buffer_, commands_buffer_, refined_indices_;
+  gl::BufferTexture records_texture_;
+  std::vector<QuadRecord> records_, previous_records_;
+  std::vector<DrawCommand> commands_, previous_commands_;
+  std::vector<uint32_t> previous_refined_indices_;
+  int refined_k_ = -1;  // the prepared frame's grid, -1: the mesh topology
+  QuadRecords record_maker_;
+  TileSlots slots_;
+  gl::TextureArray empty_heights_{GL_R32F, GL_RED, GL_FLOAT, 4},
+      empty_imagery_{GL_RGBA8, GL_RGBA, GL_UNSIGNED_BYTE, 4};
 };
 
 }  // namespace
@@ -328,9 +423,21 @@ Result<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(lod::TerrainMod
   if (imagery && imagery->manifest().sample_type != tiles::SampleType::UInt8) {
     return fail(imagery->root().string() + ": --imagery needs an imagery store (RGBA tiles)");
   }
-  auto r = std::make_unique<GlTerrainRenderer>(elevation, imagery, imagery_tiles, gpu_budget);
+  GLint max_layers = 0, max_texels = 0;
+  glGetIntegerv(GL_MAX_ARRAY_TEXTURE_LAYERS, &max_layers);
+  glGetIntegerv(GL_MAX_TEXTURE_BUFFER_SIZE, &max_texels);
+  auto r = std::make_unique<GlTerrainRenderer>(
+      elevation, imagery, imagery_tiles, gpu_budget, std::max(max_layers, 1),
+      static_cast<size_t>(std::max(max_texels, 0)) * 16 / sizeof(QuadRecord));
   RELIEF_CHECK(r->init());
   return std::unique_ptr<TerrainRenderer>(std::move(r));
+}
+
+Result<std::vector<float>> capture_positions(TerrainRenderer& renderer, const lod::View& view,
+                                             const lod::Selection& selection,
+                                             const RenderOptions& options,
+                                             const lod::RefinedMesh* refined) {
+  return static_cast<GlTerrainRenderer&>(renderer).capture(view, selection, options, refined);
 }
 
 }  // namespace relief::render

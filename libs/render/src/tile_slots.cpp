@@ -1,0 +1,80 @@
+#include "tile_slots.h"
+
+#include <algorithm>
+
+#include <fmt/format.h>
+
+namespace relief::render {
+
+TileSlots::TileSlots(uint64_t budget_bytes, int max_layers)
+    : budget_(budget_bytes),
+      max_layers_(max_layers),
+      heights_(GL_R32F, GL_RED, GL_FLOAT, 4),
+      imagery_(GL_RGBA8, GL_RGBA, GL_UNSIGNED_BYTE, 4) {}
+
+uint64_t TileSlots::allocated_bytes() const {
+  return static_cast<uint64_t>(heights_.layers()) * heights_.layer_bytes() +
+         static_cast<uint64_t>(imagery_.layers()) * imagery_.layer_bytes();
+}
+
+std::optional<int> TileSlots::find(const TextureKey& key) {
+  auto it = entries_.find(key);
+  if (it == entries_.end()) return std::nullopt;
+  it->second.frame = frame_;
+  order_.splice(order_.begin(), order_, it->second.position);
+  return it->second.layer;
+}
+
+bool TileSlots::evict_one(std::optional<bool> imagery) {
+  for (auto it = order_.end(); it != order_.begin();) {
+    --it;
+    if (imagery && it->imagery != *imagery) continue;
+    auto e = entries_.find(*it);
+    if (e->second.frame == frame_) continue;
+    pool(it->imagery).free.push_back(e->second.layer);
+    used_ -= e->second.bytes;
+    entries_.erase(e);
+    order_.erase(it);
+    ++evicted_;
+    return true;
+  }
+  return false;
+}
+
+Result<int> TileSlots::insert(const TextureKey& key, int width, int height, const void* pixels,
+                              gl::Uploads& uploads) {
+  Pool p = pool(key.imagery);
+  if (!p.array.sized()) p.array.set_layer_size(width, height);
+  if (width != p.array.width() || height != p.array.height()) {
+    return fail(fmt::format("tile {} is {}x{}, the store's others {}x{}", key.tile.to_string(),
+                            width, height, p.array.width(), p.array.height()));
+  }
+  const uint64_t bytes = p.array.layer_bytes();
+  while (used_ + bytes > budget_ && evict_one(std::nullopt)) {
+  }
+  if (p.free.empty() && p.array.layers() >= max_layers_ && !evict_one(key.imagery)) {
+    return fail(fmt::format(
+        "the frame needs more than {} {} tiles on the GPU at once (GL_MAX_ARRAY_TEXTURE_LAYERS)",
+        max_layers_, key.imagery ? "imagery" : "elevation"));
+  }
+  if (p.free.empty()) {
+    // Double, but not past what the budget holds unless the frame needs it.
+    const int old = p.array.layers();
+    const int fits = static_cast<int>(std::min<uint64_t>(budget_ / bytes, uint64_t(max_layers_)));
+    int layers = std::max(16, old * 2);
+    if (layers > fits) layers = std::max(fits, old + 16);
+    layers = std::min(layers, max_layers_);
+    p.array.reserve(layers);
+    for (int l = layers - 1; l >= old; --l) p.free.push_back(l);
+  }
+  const int layer = p.free.back();
+  p.free.pop_back();
+  p.array.upload(layer, pixels, uploads);
+  order_.push_front(key);
+  entries_.emplace(key, Entry{layer, bytes, frame_, order_.begin()});
+  used_ += bytes;
+  ++uploads_;
+  return layer;
+}
+
+}  // namespace relief::render

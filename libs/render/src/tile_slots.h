@@ -1,0 +1,84 @@
+#pragma once
+// The GPU cache (L3): data tiles as layers of two texture arrays (elevation,
+// R32F, and imagery, RGBA8) within a byte budget, least recently used first
+// out. Tiles used by the current frame are pinned; only older ones are
+// evicted. A tile is uploaded once when it arrives and stays resident while
+// it is used. Render thread only (it owns the GL context).
+#include <cstdint>
+#include <list>
+#include <optional>
+#include <unordered_map>
+#include <vector>
+
+#include "gl_backend.h"
+#include "relief/base/result.h"
+#include "relief/geo/tile_key.h"
+
+namespace relief::render {
+
+struct TextureKey {
+  geo::TileKey tile;
+  bool imagery = false;
+  bool operator==(const TextureKey&) const = default;
+};
+
+struct TextureKeyHash {
+  size_t operator()(const TextureKey& k) const {
+    return geo::TileKeyHash{}(k.tile) ^ (k.imagery ? 0x9e3779b97f4a7c15ULL : 0);
+  }
+};
+
+class TileSlots {
+ public:
+  TileSlots(uint64_t budget_bytes, int max_layers);
+  TileSlots(const TileSlots&) = delete;
+  TileSlots& operator=(const TileSlots&) = delete;
+
+  void begin_frame() { ++frame_; }
+
+  // The layer of a resident tile, now pinned for this frame.
+  std::optional<int> find(const TextureKey& key);
+  // Uploads a tile of `width` x `height` texels (R32F heights or RGBA8
+  // colours) to a free layer, pinned for this frame, evicting unpinned tiles
+  // while over budget and growing the array when no layer is free. Fails when
+  // the tile's size differs from the store's others, or when this frame
+  // already pins every layer an array can have.
+  Result<int> insert(const TextureKey& key, int width, int height, const void* pixels,
+                     gl::Uploads& uploads);
+
+  const gl::TextureArray& heights() const { return heights_; }
+  const gl::TextureArray& imagery() const { return imagery_; }
+  uint64_t used_bytes() const { return used_; }
+  uint64_t allocated_bytes() const;
+  uint64_t budget_bytes() const { return budget_; }
+  size_t count() const { return entries_.size(); }
+  int slots() const { return heights_.layers() + imagery_.layers(); }
+  uint64_t uploads() const { return uploads_; }
+  uint64_t evicted() const { return evicted_; }
+
+ private:
+  struct Entry {
+    int layer;
+    uint64_t bytes;
+    uint64_t frame;  // last frame that used it
+    std::list<TextureKey>::iterator position;
+  };
+  struct Pool {
+    gl::TextureArray& array;
+    std::vector<int>& free;
+  };
+  Pool pool(bool imagery) {
+    return imagery ? Pool{imagery_, free_imagery_} : Pool{heights_, free_heights_};
+  }
+  // Evicts the least recently used unpinned tile (of one kind, if given).
+  bool evict_one(std::optional<bool> imagery);
+
+  uint64_t budget_, used_ = 0, frame_ = 0, uploads_ = 0, evicted_ = 0;
+  int max_layers_;
+  gl::TextureArray heights_, imagery_;
+  std::vector<int> free_heights_, free_imagery_;
+  std::list<TextureKey> order_;  // most recently used first
+  std::unordered_map<TextureKey, Entry, TextureKeyHash> entries_;
+};
+
+}  // namespace relief::render
