@@ -242,7 +242,8 @@ class Selector {
           fmt::format("level of detail: more than {} quads; raise --pixel-error", o_.max_quads));
     }
     const Leaf leaf = RELIEF_TRY(assess(key));
-    bool split = leaf.visible && key.level < terrain_.max_level() &&
+    const int deepest = o_.max_level < 0 ? terrain_.max_level() : o_.max_level;
+    bool split = leaf.visible && key.level < deepest &&
                  (leaf.error_pixels > o_.pixel_error || leaf.split_for_samples);
     if (split) split = RELIEF_TRY(children_available(key));
     if (!split) {

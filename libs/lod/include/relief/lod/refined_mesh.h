@@ -21,10 +21,19 @@ struct RefinedQuad {
   uint32_t index_count = 0;  // three per triangle, same winding as MeshTopology
 };
 
+struct RefineStats {
+  uint64_t marks_evaluated = 0;      // split criteria evaluated
+  uint64_t unresolved = 0;           // diamonds over the threshold that could not split
+  double max_unresolved_pixels = 0;  // their largest projected error bound
+  uint32_t tiles_measured = 0;       // data tiles whose diamond errors were computed
+  double seconds = 0;
+};
+
 struct RefinedMesh {
   int grid_k = 0;
   std::vector<uint32_t> indices;   // grid vertex ids
   std::vector<RefinedQuad> quads;  // parallel to Selection::quads
+  RefineStats stats;
 
   uint32_t grid_columns() const { return (2u << grid_k) + 1; }
   uint32_t grid_rows() const { return (1u << grid_k) + 1; }
