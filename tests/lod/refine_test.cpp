@@ -11,6 +11,8 @@
 #include <cmath>
 #include <map>
 #include <random>
+#include <stdexcept>
+#include <string>
 #include <unordered_map>
 #include <unordered_set>
 
@@ -35,7 +37,7 @@ struct Terrain {
   const tiles::Store& store;
   MeshTopology mesh{4};
   TerrainModel terrain;
-  RefineCache cache{uint64_t{2} << 30};
+  RefineCache cache{uint64_t{1} << 30};
 };
 
 Terrain& pyrenees() {
@@ -194,40 +196,45 @@ class RefinedEvaluator {
   std::unordered_map<geo::TileKey, size_t, geo::TileKeyHash> index_;
 };
 
+// Projected distance between finest samples and the refined mesh above them:
+// `per_quad` random finest samples in each selected quad, those on screen.
 struct Measured {
   size_t compared = 0;
   double worst = 0;
 };
 
-// Projected distance between finest samples and the refined mesh above them,
-// for `count` random finest samples on screen.
 Measured measure(Terrain& t, const View& view, const Selection& s, const RefinedMesh& m,
-                 int count) {
+                 int per_quad) {
   RefinedEvaluator eval(t.terrain, s, m);
-  const auto& finest = t.store.index(t.terrain.data_max_level()).entries();
+  const int finest = t.terrain.data_max_level();
   std::mt19937 rng(7);
+  std::uniform_real_distribution<double> unit(0, 1);
   Measured out;
-  for (int k = 0; k < count; ++k) {
-    const auto& e = finest[rng() % finest.size()];
-    auto tile = t.terrain.tile(e.key);
-    EXPECT_TRUE(tile);
-    const int i = static_cast<int>(rng() % t.terrain.tile_width()),
-              j = static_cast<int>(rng() % t.terrain.tile_height());
-    const double lon = t.store.grid().sample_lon(e.key, i),
-                 lat = t.store.grid().sample_lat(e.key, j);
-    const float h = (*tile)->f32()[static_cast<size_t>(j + t.terrain.border()) * (*tile)->width() +
-                                   i + t.terrain.border()];
-    const SelectedQuad* q = eval.containing(lon, lat);
-    if (!q) continue;  // culled
-    const auto on_mesh = eval.point(*q, lon, lat);
-    EXPECT_TRUE(on_mesh) << "no triangle of " << q->key.to_string() << " holds " << lon << ","
-                         << lat;
-    if (!on_mesh) continue;
-    double ax, ay, bx, by;
-    if (!view.project(ecef(lon, lat, h), ax, ay) || !view.project(*on_mesh, bx, by)) continue;
-    if (ax < 0 || ay < 0 || ax >= view.width || ay >= view.height) continue;
-    out.worst = std::max(out.worst, std::hypot(ax - bx, ay - by));
-    ++out.compared;
+  for (const SelectedQuad& sq : s.quads) {
+    const geo::GeoBox b = sq.key.bounds();
+    for (int k = 0; k < per_quad; ++k) {
+      const geo::SampleIndex si = t.store.grid().locate(finest, b.west + unit(rng) * b.width(),
+                                                        b.south + unit(rng) * b.height());
+      if (!t.store.has_tile(si.tile)) break;  // no data here: the ellipsoid
+      auto tile = t.terrain.tile(si.tile);
+      EXPECT_TRUE(tile);
+      const double lon = t.store.grid().sample_lon(si.tile, si.i);
+      const double lat = t.store.grid().sample_lat(si.tile, si.j);
+      const float h =
+          (*tile)->f32()[static_cast<size_t>(si.j + t.terrain.border()) * (*tile)->width() + si.i +
+                         t.terrain.border()];
+      const SelectedQuad* q = eval.containing(lon, lat);
+      if (!q) continue;  // culled
+      const auto on_mesh = eval.point(*q, lon, lat);
+      EXPECT_TRUE(on_mesh) << "no triangle of " << q->key.to_string() << " holds " << lon << ","
+                           << lat;
+      if (!on_mesh) continue;
+      double ax, ay, bx, by;
+      if (!view.project(ecef(lon, lat, h), ax, ay) || !view.project(*on_mesh, bx, by)) continue;
+      if (ax < 0 || ay < 0 || ax >= view.width || ay >= view.height) continue;
+      out.worst = std::max(out.worst, std::hypot(ax - bx, ay - by));
+      ++out.compared;
+    }
   }
   return out;
 }
@@ -239,6 +246,7 @@ struct Case {
   double pixel_error;
 };
 
+// The views of error_bound_test, a grazing one, and one at 55N west of Greenwich.
 std::vector<Case> cases() {
   return {
       {"oblique", pyrenees, look_at(1.45, 42.55, 1500, 30000, 20, -35, 60, 640, 480), 1.0},
@@ -249,24 +257,178 @@ std::vector<Case> cases() {
   };
 }
 
-TEST(Refine, Explore) {
+const Case& case_named(const std::string& name) {
+  static const std::vector<Case> all = cases();
+  for (const Case& c : all) {
+    if (name == c.name) return c;
+  }
+  throw std::runtime_error("no case " + name);
+}
+
+TEST(Refine, FinestSamplesProjectWithinThePixelError) {
   for (const Case& c : cases()) {
+    SCOPED_TRACE(c.name);
     Terrain& t = c.terrain();
     auto view = make_view(c.camera);
     ASSERT_TRUE(view);
     const Selection s = select(t, *view, c.pixel_error);
     for (RefineVariant v : {RefineVariant::kTopDown, RefineVariant::kBottomUp}) {
+      // Bottom-up decides every mark of every quad (seconds): two views.
+      if (v == RefineVariant::kBottomUp && std::string(c.name) != "down" &&
+          std::string(c.name) != "scotland") {
+        continue;
+      }
       const RefinedMesh m = refined(t, *view, s, c.pixel_error, v);
-      const Measured e = measure(t, *view, s, m, 4000);
-      printf(
-          "%s %s: %zu quads (%lu quad-mode tris), %lu tris, %lu marks, %u tiles, %.3f s, "
-          "unresolved %lu (%.2f px), worst %.3f px over %zu\n",
-          c.name, v == RefineVariant::kTopDown ? "top-down" : "bottom-up", s.quads.size(),
-          (unsigned long)s.stats.triangles, (unsigned long)m.triangles(),
-          (unsigned long)m.stats.marks_evaluated, m.stats.tiles_measured, m.stats.seconds,
-          (unsigned long)m.stats.unresolved, m.stats.max_unresolved_pixels, e.worst, e.compared);
+      EXPECT_EQ(m.stats.unresolved, 0u)
+          << (v == RefineVariant::kTopDown ? "top-down" : "bottom-up");
+      const Measured e = measure(t, *view, s, m, 400);
+      EXPECT_GT(e.compared, 1000u);
+      EXPECT_LE(e.worst, c.pixel_error) << e.worst << " px over " << e.compared << " samples";
     }
   }
+}
+
+TEST(Refine, BothVariantsGiveTheSameMesh) {
+  for (const char* name : {"down", "scotland"}) {
+    SCOPED_TRACE(name);
+    const Case& c = case_named(name);
+    Terrain& t = c.terrain();
+    auto view = make_view(c.camera);
+    ASSERT_TRUE(view);
+    const Selection s = select(t, *view, c.pixel_error);
+    for (double pixel_error : {c.pixel_error, 4 * c.pixel_error}) {
+      const RefinedMesh a = refined(t, *view, s, pixel_error, RefineVariant::kTopDown);
+      const RefinedMesh b = refined(t, *view, s, pixel_error, RefineVariant::kBottomUp);
+      EXPECT_GT(a.triangles(), 8 * s.quads.size());
+      EXPECT_EQ(a.indices, b.indices);
+      ASSERT_EQ(a.quads.size(), b.quads.size());
+      for (size_t i = 0; i < a.quads.size(); ++i) {
+        EXPECT_EQ(a.quads[i].first_index, b.quads[i].first_index);
+        EXPECT_EQ(a.quads[i].index_count, b.quads[i].index_count);
+      }
+      // Top-down evaluates a small part of the marks bottom-up does.
+      EXPECT_LT(a.stats.marks_evaluated * 10, b.stats.marks_evaluated);
+    }
+  }
+}
+
+TEST(Refine, FewerTrianglesThanTheFullMeshAndFewerForLargerErrors) {
+  Terrain& t = pyrenees();
+  const uint64_t full_per_quad = uint64_t{4} * t.terrain.tile_width() * t.terrain.tile_height();
+  {
+    const Case& c = case_named("oblique");
+    auto view = make_view(c.camera);
+    ASSERT_TRUE(view);
+    const Selection s = select(t, *view, 1.0);
+    uint64_t previous = UINT64_MAX;
+    for (double pixel_error : {0.5, 1.0, 2.0, 4.0, 8.0}) {
+      const RefinedMesh m = refined(t, *view, s, pixel_error, RefineVariant::kTopDown);
+      EXPECT_LE(m.triangles(), previous) << pixel_error << " px";
+      EXPECT_LT(m.triangles(), full_per_quad * s.quads.size());
+      previous = m.triangles();
+    }
+  }
+  // From far away, a few triangles per quad.
+  auto view = make_view(look_at(1.5, 42.5, 1500, 400000, 30, -60, 60, 640, 480));
+  ASSERT_TRUE(view);
+  const Selection s = select(t, *view, 1.0);
+  const RefinedMesh m = refined(t, *view, s, 1.0, RefineVariant::kTopDown);
+  EXPECT_LT(m.triangles() * 100, full_per_quad * s.quads.size());
+  EXPECT_LT(m.triangles(), uint64_t{2} * view->width * view->height);
+}
+
+// Every triangle edge is shared by exactly two triangles, except on the sides
+// of the selection's boundary (culled neighbours): no cracks, no T-junctions.
+// Vertices shared by quads of equal and different levels get bit-identical
+// heights.
+void expect_conforming(Terrain& t, const Selection& s, const RefinedMesh& m) {
+  RefinedEvaluator eval(t.terrain, s, m);
+  using Point = std::pair<double, double>;
+  std::map<std::pair<Point, Point>, std::pair<int, bool>> edges;  // count, on an open side
+  std::map<Point, std::pair<double, size_t>> heights;             // height, quad
+  size_t shared = 0, across_levels = 0;
+  const int n = 1 << m.grid_k;
+  for (size_t qi = 0; qi < s.quads.size(); ++qi) {
+    const SelectedQuad& q = s.quads[qi];
+    const RefinedQuad& rq = m.quads[qi];
+    // An edge on a side with no selected quad across it (culled).
+    auto open = [&](GridPos a, GridPos b) {
+      const int dx = a.x == 0 && b.x == 0 ? -1 : a.x == 2 * n && b.x == 2 * n ? 1 : 0;
+      const int dy = a.y == 0 && b.y == 0 ? 1 : a.y == n && b.y == n ? -1 : 0;
+      if (!dx && !dy) return false;
+      const geo::GeoBox box = q.key.bounds();
+      const double cell = box.height() / n, step = 1e-7;
+      double lon = box.west + (a.x + b.x) / 2.0 * cell + dx * step;
+      const double lat = box.north - (a.y + b.y) / 2.0 * cell + dy * step;
+      if (lon < -180) lon += 360;
+      if (lon >= 180) lon -= 360;
+      return !eval.containing(lon, lat);
+    };
+    for (uint32_t i = rq.first_index; i < rq.first_index + rq.index_count; i += 3) {
+      for (int e = 0; e < 3; ++e) {
+        const GridPos a = eval.pos(m.indices[i + e]), b = eval.pos(m.indices[i + (e + 1) % 3]);
+        Point pa = eval.lonlat(q, a), pb = eval.lonlat(q, b);
+        if (pb < pa) std::swap(pa, pb);
+        auto& edge = edges[{pa, pb}];
+        ++edge.first;
+        edge.second |= open(a, b);
+        if (!(a.x == 0 || a.y == 0 || a.x == 2 * n || a.y == n)) continue;
+        const double h = eval.height(q, a);
+        auto [it, fresh] = heights.try_emplace(eval.lonlat(q, a), h, qi);
+        if (fresh || it->second.second == qi) continue;
+        ++shared;
+        across_levels += s.quads[it->second.second].key.level != q.key.level;
+        ASSERT_EQ(it->second.first, h)
+            << q.key.to_string() << " and " << s.quads[it->second.second].key.to_string() << " at "
+            << it->first.first << "," << it->first.second;
+      }
+    }
+  }
+  size_t inner = 0;
+  for (const auto& [edge, c] : edges) {
+    const bool pole = std::abs(edge.first.second) == 90 && edge.first.second == edge.second.second;
+    if (c.first == 1 && (c.second || pole)) continue;
+    ASSERT_EQ(c.first, 2) << "edge (" << edge.first.first << "," << edge.first.second << ")-("
+                          << edge.second.first << "," << edge.second.second << ")";
+    ++inner;
+  }
+  EXPECT_GT(inner, 10000u);
+  EXPECT_GT(shared, 1000u);
+  EXPECT_GT(across_levels, 20u);
+}
+
+TEST(Refine, ConformingMeshesWithBitIdenticalSharedVertices) {
+  for (const char* name : {"oblique", "low", "grazing", "scotland"}) {
+    SCOPED_TRACE(name);
+    const Case& c = case_named(name);
+    Terrain& t = c.terrain();
+    auto view = make_view(c.camera);
+    ASSERT_TRUE(view);
+    const Selection s = select(t, *view, c.pixel_error);
+    expect_conforming(t, s, refined(t, *view, s, c.pixel_error, RefineVariant::kTopDown));
+  }
+}
+
+TEST(Refine, RefusesQuadsDeeperThanTheDataAndSelectionsWithoutNeighbours) {
+  Terrain& t = pyrenees();
+  auto view = make_view(case_named("low").camera);
+  ASSERT_TRUE(view);
+  SelectionOptions o;
+  o.neighbour_indices = true;
+  auto deep = select_quads(*view, t.terrain, o);  // down to max_level(), below the data
+  ASSERT_TRUE(deep);
+  ASSERT_GT(t.terrain.max_level(), t.terrain.data_max_level());
+  auto m = refine(*view, t.terrain, *deep, RefineOptions{});
+  ASSERT_FALSE(m);
+  EXPECT_NE(m.error().message.find("deeper than the store's finest level"), std::string::npos)
+      << m.error().message;
+  o.max_level = t.terrain.data_max_level();
+  o.neighbour_indices = false;
+  auto unlinked = select_quads(*view, t.terrain, o);
+  ASSERT_TRUE(unlinked);
+  m = refine(*view, t.terrain, *unlinked, RefineOptions{});
+  ASSERT_FALSE(m);
+  EXPECT_NE(m.error().message.find("neighbour_indices"), std::string::npos) << m.error().message;
 }
 
 }  // namespace

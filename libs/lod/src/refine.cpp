@@ -116,6 +116,7 @@ struct Quad {
   std::shared_ptr<const DiamondErrors> errors;  // null: no data, height 0
   std::unique_ptr<uint8_t[], FreeMarks> marks;
   std::array<SideMax, 4> edge;  // west, east, north, south
+  uint8_t blocking = 0;         // Side bits: shared with a coarser selected quad
 };
 
 struct Located {
@@ -238,6 +239,11 @@ class Refiner {
     q.bounds = s.key.bounds();
     q.cell = q.bounds.height() / n;
     q.level_error = RELIEF_TRY(terrain_.level_error(s.key));
+    for (int side = 0; side < 4; ++side) {
+      if ((s.coarse_sides & kSideBits[side]) && s.neighbours[static_cast<size_t>(2 * side)] >= 0) {
+        q.blocking |= kSideBits[side];
+      }
+    }
     if (const DataWindow w = terrain_.window(s.key); w.tile) {
       q.errors = RELIEF_TRY(cache_.get(terrain_, grid_, *w.tile, stats_.tiles_measured));
     }
@@ -370,11 +376,12 @@ class Refiner {
     }
   }
 
-  // Diamonds that can never split: along a side shared with a coarser quad,
-  // a sample's side of that quad (s <= 2 here) and the cells whose split
-  // would need one.
+  // Diamonds that can never split: along a side shared with a coarser quad
+  // that is drawn, a sample's side of that quad (s <= 2 here) and the cells
+  // whose split would need one. (Against a culled quad, vertices may go
+  // anywhere: they take the parent's data all the same.)
   bool blocked(int q, GridPoint p, const Diamond& d) const {
-    const uint8_t coarse = selection_.quads[static_cast<size_t>(q)].coarse_sides;
+    const uint8_t coarse = quads_[static_cast<size_t>(q)].blocking;
     if (!coarse) return false;
     const int32_t n = grid_.n();
     if (d.kind == MarkKind::kDiagonal) {
@@ -385,6 +392,25 @@ class Refiner {
     if (d.size > 2) return false;
     return ((coarse & kWest) && p.x == 0) || ((coarse & kEast) && p.x == 2 * n) ||
            ((coarse & kNorth) && p.y == 0) || ((coarse & kSouth) && p.y == n);
+  }
+
+  // Records the coarser neighbour whose side blocks diamond d of quad q.
+  void want_split_across(int q, GridPoint p, const Diamond& d) {
+    if (!blocked(q, p, d)) return;
+    const SelectedQuad& s = selection_.quads[static_cast<size_t>(q)];
+    const int32_t n = grid_.n();
+    const bool near[4] = {p.x <= 1, p.x >= 2 * n - 1, p.y <= 1, p.y >= n - 1};
+    const int offset[4][2] = {{-1, 0}, {1, 0}, {0, -1}, {0, 1}};
+    for (int side = 0; side < 4; ++side) {
+      if (!near[side] || !(quads_[static_cast<size_t>(q)].blocking & kSideBits[side])) continue;
+      // The coarser neighbour is one level up (restricted quadtree), culled or not.
+      const auto across = s.key.neighbour(offset[side][0], offset[side][1]);
+      if (!across || !across->parent()) continue;
+      auto& wanted = stats_.split_wanted;
+      if (std::find(wanted.begin(), wanted.end(), *across->parent()) == wanted.end()) {
+        wanted.push_back(*across->parent());
+      }
+    }
   }
 
   // The split criterion's value for the part of diamond d inside quad q: the
@@ -419,6 +445,15 @@ class Refiner {
                            lat + r * quad.cell};
     const double radius = kArc * std::sqrt(2.0) * r * quad.cell * kDegree + (hi - lo) / 2 + pad;
     const Vec3 c = ecef(lon, lat, (lo + hi) / 2);
+    // Most diamonds are far below the threshold: the distance bound of
+    // vertical_error_pixels, from a nearer point than the box's, settles them.
+    const double near = length(c - view_.eye) - std::sqrt(3.0) * radius;
+    if (near > 0) {
+      const double corner =
+          view_.tan_half_x * view_.tan_half_x + view_.tan_half_y * view_.tan_half_y;
+      const double bound = view_.pixels_per_radian * metres * (1 + corner) / near;
+      if (bound <= o_.pixel_error) return bound;
+    }
     const Box box{c - Vec3{radius, radius, radius}, c + Vec3{radius, radius, radius}};
     return vertical_error_pixels(view_, box, area, metres);
   }
@@ -434,7 +469,10 @@ class Refiner {
     const std::optional<Located> other = mirror(q, p);
     double px = pixels(q, p, d);
     bool stuck = blocked(q, p, d);
-    if (other) {
+    // The half across a side shared with a finer quad may be a sample's
+    // side there (the finer quad's mark is blocked then): that half is the
+    // coarser quad's full mesh already, nothing to split.
+    if (other && MarkGrid::splittable(grid_.diamond(other->p))) {
       const Diamond od = grid_.diamond(other->p);
       px = std::max(px, pixels(other->quad, other->p, od));
       stuck |= blocked(other->quad, other->p, od);
@@ -446,6 +484,8 @@ class Refiner {
     if (px > o_.pixel_error) {
       ++stats_.unresolved;
       stats_.max_unresolved_pixels = std::max(stats_.max_unresolved_pixels, px);
+      want_split_across(q, p, d);
+      if (other) want_split_across(other->quad, other->p, grid_.diamond(other->p));
     }
     m = kKept;
     if (other && mark(other->quad, other->p) == kUnknown) mark(other->quad, other->p) = kKept;

@@ -14,6 +14,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "relief/geo/tile_key.h"
+
 namespace relief::lod {
 
 struct RefinedQuad {
@@ -25,7 +27,10 @@ struct RefineStats {
   uint64_t marks_evaluated = 0;      // split criteria evaluated
   uint64_t unresolved = 0;           // diamonds over the threshold that could not split
   double max_unresolved_pixels = 0;  // their largest projected error bound
-  uint32_t tiles_measured = 0;       // data tiles whose diamond errors were computed
+  // The coarser quads whose sides stopped those splits: split them in the
+  // selection and refine again to keep the bound everywhere.
+  std::vector<geo::TileKey> split_wanted;
+  uint32_t tiles_measured = 0;  // data tiles whose diamond errors were computed
   double seconds = 0;
 };
 
