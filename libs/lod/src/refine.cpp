@@ -239,6 +239,16 @@ class Refiner {
     q.bounds = s.key.bounds();
     q.cell = q.bounds.height() / n;
     q.level_error = RELIEF_TRY(terrain_.level_error(s.key));
+    if (q.level_error > 0) {
+      // No split makes up for the distance between the level's full mesh
+      // and the finest data: a quad where that alone may exceed the threshold
+      // refines to its full mesh, and the selection should split it instead.
+      TerrainModel::QuadInfo* info = RELIEF_TRY(terrain_.quad(s.key));
+      if (vertical_error_pixels(view_, info->box, q.bounds, q.level_error) > o_.pixel_error) {
+        ++stats_.too_coarse;
+        stats_.split_wanted.push_back(s.key);
+      }
+    }
     for (int side = 0; side < 4; ++side) {
       if ((s.coarse_sides & kSideBits[side]) && s.neighbours[static_cast<size_t>(2 * side)] >= 0) {
         q.blocking |= kSideBits[side];

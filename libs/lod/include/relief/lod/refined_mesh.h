@@ -27,8 +27,12 @@ struct RefineStats {
   uint64_t marks_evaluated = 0;      // split criteria evaluated
   uint64_t unresolved = 0;           // diamonds over the threshold that could not split
   double max_unresolved_pixels = 0;  // their largest projected error bound
-  // The coarser quads whose sides stopped those splits: split them in the
-  // selection and refine again to keep the bound everywhere.
+  // Quads whose level error (TerrainModel::level_error) alone may project
+  // over the threshold: they refine to their full mesh where it does.
+  uint32_t too_coarse = 0;
+  // Those quads, and the coarser quads whose sides stopped a split: the
+  // selection should split them (and refine again) to keep the bound with
+  // the fewest triangles.
   std::vector<geo::TileKey> split_wanted;
   uint32_t tiles_measured = 0;  // data tiles whose diamond errors were computed
   double seconds = 0;
