@@ -11,13 +11,20 @@ int64_t cross(GridPoint o, GridPoint a, GridPoint b) {
   return int64_t{a.x - o.x} * (b.y - o.y) - int64_t{a.y - o.y} * (b.x - o.x);
 }
 
-// Height at p of the plane through the triangle (a, b, c) with heights ha, hb, hc.
-double plane(GridPoint a, GridPoint b, GridPoint c, double ha, double hb, double hc, GridPoint p) {
-  const double d = static_cast<double>(cross(a, b, c));
-  const double wb = static_cast<double>(cross(a, p, c)) / d;
-  const double wc = static_cast<double>(cross(a, b, p)) / d;
-  return ha + (hb - ha) * wb + (hc - ha) * wc;
-}
+// The plane through triangle (a, b, c) with heights ha, hb, hc, as
+// h(p) = ha + gx (p.x - a.x) + gy (p.y - a.y).
+struct TrianglePlane {
+  GridPoint a;
+  double ha = 0, gx = 0, gy = 0;
+  TrianglePlane(GridPoint a_, GridPoint b, GridPoint c, double ha_, double hb, double hc)
+      : a(a_), ha(ha_) {
+    const double d = static_cast<double>(cross(a, b, c));
+    const double bx = b.x - a.x, by = b.y - a.y, cx = c.x - a.x, cy = c.y - a.y;
+    gx = ((hb - ha) * cy - (hc - ha) * by) / d;
+    gy = ((hc - ha) * bx - (hb - ha) * cx) / d;
+  }
+  double at(int32_t x, int32_t y) const { return ha + gx * (x - a.x) + gy * (y - a.y); }
+};
 
 }  // namespace
 
@@ -41,22 +48,30 @@ DiamondErrors measure_diamonds(const MarkGrid& grid, const tiles::Raster& tile, 
       const GridPoint e0 = d.ends[0], e1 = d.ends[1];
       const double h0 = fm[grid.id(e0)], h1 = fm[grid.id(e1)];
       const int64_t side0 = cross(e0, e1, d.apexes[0]);
+      // The triangles' planes (an apex outside the quad: never used).
+      auto plane_of = [&](GridPoint a) {
+        return grid.inside(a) ? TrianglePlane(a, e0, e1, fm[grid.id(a)], h0, h1)
+                              : TrianglePlane(e0, e1, a, h0, h1, 0);
+      };
+      const TrianglePlane planes[2] = {plane_of(d.apexes[0]), plane_of(d.apexes[1])};
+      const bool first_on_line = grid.inside(d.apexes[0]);
       double worst = 0, lo = INFINITY, hi = -INFINITY;
       const int32_t r = d.size;
       const int32_t x0 = std::max(0, centre.x - r), x1 = std::min(2 * grid.n(), centre.x + r);
       const int32_t y0 = std::max(0, centre.y - r), y1 = std::min(grid.n(), centre.y + r);
+      const bool diagonal = d.kind == MarkKind::kDiagonal;
       for (int32_t y = y0; y <= y1; ++y) {
-        for (int32_t x = x0 + ((x0 + y) & 1); x <= x1; x += 2) {
-          const int32_t dx = std::abs(x - centre.x), dy = std::abs(y - centre.y);
-          if (d.kind != MarkKind::kDiagonal && dx + dy > r) continue;
-          const GridPoint p{x, y};
-          const int64_t side = cross(e0, e1, p);
-          // The triangle holding p; points on the hypotenuse take either.
-          const bool first = side == 0 ? grid.inside(d.apexes[0]) : (side > 0) == (side0 > 0);
-          const GridPoint a = first ? d.apexes[0] : d.apexes[1];
-          const double v = fm[grid.id(p)];
-          const double interp = plane(a, e0, e1, fm[grid.id(a)], h0, h1, p);
-          worst = std::max(worst, std::abs(interp - v));
+        // Axis diamonds: the points within L1 distance r of the centre.
+        const int32_t reach = diagonal ? r : r - std::abs(y - centre.y);
+        int32_t xa = std::max(x0, centre.x - reach), xb = std::min(x1, centre.x + reach);
+        xa += (xa + y) & 1;  // full-mesh vertices: x + y even
+        const float* row = &fm[grid.id({0, y})];
+        for (int32_t x = xa; x <= xb; x += 2) {
+          const int64_t side = cross(e0, e1, GridPoint{x, y});
+          // The triangle holding the point; points on the hypotenuse take either.
+          const bool first = side == 0 ? first_on_line : (side > 0) == (side0 > 0);
+          const double v = row[x];
+          worst = std::max(worst, std::abs(planes[first ? 0 : 1].at(x, y) - v));
           lo = std::min(lo, v);
           hi = std::max(hi, v);
         }
