@@ -202,6 +202,8 @@ class RefinedEvaluator {
 
 // Projected distance between finest samples and the refined mesh above them:
 // `per_quad` random finest samples in each selected quad, those on screen.
+// None is excluded: voids are height 0 in the decoded tiles the mesh is made
+// of, and quads without data draw the ellipsoid (no finest samples).
 struct Measured {
   size_t compared = 0;
   double worst = 0;
@@ -216,9 +218,17 @@ Measured measure(Terrain& t, const View& view, const Selection& s, const Refined
   Measured out;
   for (const SelectedQuad& sq : s.quads) {
     const geo::GeoBox b = sq.key.bounds();
+    // Half of them along the sides, within two of the quad's samples, where
+    // quads of different levels meet.
+    const double band = 2.0 / t.terrain.tile_width();
     for (int k = 0; k < per_quad; ++k) {
-      const geo::SampleIndex si = t.store.grid().locate(finest, b.west + unit(rng) * b.width(),
-                                                        b.south + unit(rng) * b.height());
+      double u = unit(rng), v = unit(rng);
+      if (k % 2) {
+        const uint32_t side = rng() % 4;
+        (side < 2 ? u : v) = side % 2 ? 1 - band * unit(rng) : band * unit(rng);
+      }
+      const geo::SampleIndex si =
+          t.store.grid().locate(finest, b.west + u * b.width(), b.south + v * b.height());
       if (!t.store.has_tile(si.tile)) continue;  // no data here: the ellipsoid
       auto tile = t.terrain.tile(si.tile);
       EXPECT_TRUE(tile);
