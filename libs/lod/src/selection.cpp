@@ -264,6 +264,7 @@ class Selector {
 
   // Edge marks refine inside quads down to every sample: no virtual levels.
   int deepest() const {
+    if (o_.max_level >= 0) return o_.max_level;
     return o_.mode == LodMode::edge_marks ? terrain_.data_max_level() : terrain_.max_level();
   }
 

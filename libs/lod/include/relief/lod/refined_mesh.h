@@ -14,6 +14,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "relief/geo/tile_key.h"
+
 namespace relief::lod {
 
 struct RefinedQuad {
@@ -21,10 +23,26 @@ struct RefinedQuad {
   uint32_t index_count = 0;  // three per triangle, same winding as MeshTopology
 };
 
+struct RefineStats {
+  uint64_t marks_evaluated = 0;      // split criteria evaluated
+  uint64_t unresolved = 0;           // diamonds over the threshold that could not split
+  double max_unresolved_pixels = 0;  // their largest projected error bound
+  // Quads whose level error (TerrainModel::level_error) alone may project
+  // over the threshold: they refine to their full mesh where it does.
+  uint32_t too_coarse = 0;
+  // Those quads, and the coarser quads whose sides stopped a split: the
+  // selection should split them (and refine again) to keep the bound with
+  // the fewest triangles.
+  std::vector<geo::TileKey> split_wanted;
+  uint32_t tiles_measured = 0;  // data tiles whose diamond errors were computed
+  double seconds = 0;
+};
+
 struct RefinedMesh {
   int grid_k = 0;
   std::vector<uint32_t> indices;   // grid vertex ids
   std::vector<RefinedQuad> quads;  // parallel to Selection::quads
+  RefineStats stats;
 
   uint32_t grid_columns() const { return (2u << grid_k) + 1; }
   uint32_t grid_rows() const { return (1u << grid_k) + 1; }

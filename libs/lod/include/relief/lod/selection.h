@@ -38,6 +38,9 @@ struct SelectionOptions {
   // mesh of one vertex per sample: the brute-force reference).
   bool full_resolution = false;
   size_t max_quads = 200000;
+  // The deepest level split to (< 0: the terrain's max_level()); edge-mark
+  // refinement (refine.h) wants the store's finest, data_max_level().
+  int max_level = -1;
   // Fill SelectedQuad::neighbours (for consumers that walk the mesh on the
   // GPU, like the seed's refinement); costs ~0.3 ms per 2000 quads.
   bool neighbour_indices = false;

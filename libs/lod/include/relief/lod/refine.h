@@ -1,0 +1,67 @@
+#pragma once
+// Edge-mark refinement (seed 003 ch. 3), the CPU reference: the quads of a
+// restricted-quadtree selection refined into one conforming triangulation of
+// right isosceles triangles by a per-diamond screen-space split criterion on
+// the actual samples, down to the full mesh of each quad's level (every
+// sample cell cut by its diagonals). Two variants giving the same mesh:
+// top-down (from four triangles per quad half, splitting with forced splits
+// propagated across quads of equal and different levels: seed Fig. 3.8) and
+// bottom-up (every edge mark of every quad decided, finest first: Fig. 3.6).
+//
+// The criterion splits a diamond D (a triangle pair) while
+//   vertical_error_pixels(view, box(D), area(D),
+//                         err(D) + level_error(quad) + edge(D) + sagitta(D)) > t,
+// where err(D) bounds |D's two triangles - the level's full mesh| over D
+// (measured once per data tile, diamond_errors.h), level_error that full mesh's
+// distance to the finest data, edge(D) how far vertices on a side shared with
+// a coarser quad move by taking the parent's data, sagitta(D) the chord error
+// of flat triangles on the ellipsoid. So every finest sample projects within t
+// pixels of the mesh, except where a quad meets a coarser one: there a sample
+// cell's side cannot be split (the coarser quad has no vertex there), and what
+// the criterion would still want is counted in RefineStats::unresolved (the
+// selection should then split the coarser quad).
+#include <cstdint>
+#include <memory>
+
+#include "relief/base/result.h"
+#include "relief/lod/camera.h"
+#include "relief/lod/refined_mesh.h"
+#include "relief/lod/selection.h"
+#include "relief/lod/terrain_model.h"
+
+namespace relief::lod {
+
+enum class RefineVariant : uint8_t { kTopDown, kBottomUp };
+
+// Per-diamond errors of data tiles (about 4 MB per tile of 512 x 256), kept
+// between frames within a byte budget, least recently used out. For one store;
+// used by one thread at a time (the render thread).
+class RefineCache {
+ public:
+  explicit RefineCache(uint64_t budget_bytes = uint64_t{512} << 20);
+  ~RefineCache();
+  RefineCache(const RefineCache&) = delete;
+  RefineCache& operator=(const RefineCache&) = delete;
+  uint64_t bytes() const;
+  size_t tiles() const;
+
+  struct Impl;
+  Impl& impl() { return *impl_; }
+
+ private:
+  std::unique_ptr<Impl> impl_;
+};
+
+struct RefineOptions {
+  double pixel_error = 1.0;  // largest allowed screen-space error, pixels
+  RefineVariant variant = RefineVariant::kTopDown;
+  RefineCache* cache = nullptr;  // null: a cache for this call only
+};
+
+// Needs a selection made with SelectionOptions::neighbour_indices, of quads no
+// deeper than the store's finest level (terrain.data_max_level()): the grid
+// of such a quad already reaches every sample.
+Result<RefinedMesh> refine(const View& view, TerrainModel& terrain, const Selection& selection,
+                           const RefineOptions& options);
+
+}  // namespace relief::lod

@@ -1,0 +1,552 @@
+#include "relief/lod/refine.h"
+
+#include <algorithm>
+#include <bit>
+#include <cassert>
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <list>
+#include <optional>
+#include <unordered_map>
+
+#include <fmt/format.h>
+
+#include "diamond_errors.h"
+#include "edge_marks.h"
+#include "relief/lod/screen_error.h"
+
+namespace relief::lod {
+
+struct RefineCache::Impl {
+  uint64_t budget = 0, bytes = 0;
+  std::list<geo::TileKey> lru;  // most recent first
+  struct Entry {
+    std::shared_ptr<const DiamondErrors> errors;
+    std::list<geo::TileKey>::iterator at;
+  };
+  std::unordered_map<geo::TileKey, Entry, geo::TileKeyHash> entries;
+
+  // The errors of the diamonds of data tile `key`; `measured` counts new ones.
+  Result<std::shared_ptr<const DiamondErrors>> get(TerrainModel& terrain, const MarkGrid& grid,
+                                                   const geo::TileKey& key, uint32_t& measured) {
+    if (auto it = entries.find(key); it != entries.end()) {
+      lru.splice(lru.begin(), lru, it->second.at);
+      return it->second.errors;
+    }
+    const TerrainModel::TilePtr tile = RELIEF_TRY(terrain.tile(key));
+    if (!tile) return std::shared_ptr<const DiamondErrors>{};
+    auto errors =
+        std::make_shared<const DiamondErrors>(measure_diamonds(grid, *tile, terrain.border()));
+    ++measured;
+    bytes += errors->bytes();
+    lru.push_front(key);
+    entries[key] = {errors, lru.begin()};
+    while (bytes > budget && lru.size() > 1) {  // users hold what this frame needs
+      auto old = entries.find(lru.back());
+      bytes -= old->second.errors->bytes();
+      entries.erase(old);
+      lru.pop_back();
+    }
+    return errors;
+  }
+};
+
+RefineCache::RefineCache(uint64_t budget_bytes) : impl_(std::make_unique<Impl>()) {
+  impl_->budget = budget_bytes;
+}
+RefineCache::~RefineCache() = default;
+uint64_t RefineCache::bytes() const {
+  return impl_->bytes;
+}
+size_t RefineCache::tiles() const {
+  return impl_->entries.size();
+}
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kDegree = kPi / 180;
+// Metres per radian of arc, above every radius of curvature of the ellipsoid
+// (6 399 594 m at the poles) plus the highest terrain: the chord between two
+// points at the same height is at most this times their angular distance.
+constexpr double kArc = 6.41e6;
+constexpr uint8_t kUnknown = 0, kSplit = 1, kKept = 2;
+constexpr uint8_t kSideBits[4] = {kWest, kEast, kNorth, kSouth};
+
+struct FreeMarks {
+  void operator()(uint8_t* p) const { std::free(p); }
+};
+
+// Range maxima over the heights by which the vertices of one side move when
+// they take the coarser neighbour's data (a sparse table).
+class SideMax {
+ public:
+  void build(const std::vector<float>& values) {
+    table_.assign(1, values);
+    for (size_t w = 1; 2 * w <= values.size(); w *= 2) {
+      const std::vector<float>& prev = table_.back();
+      std::vector<float> next(values.size() - 2 * w + 1);
+      for (size_t i = 0; i < next.size(); ++i) next[i] = std::max(prev[i], prev[i + w]);
+      table_.push_back(std::move(next));
+    }
+  }
+  bool empty() const { return table_.empty(); }
+  // Largest value in [a, b], clamped to the side.
+  float max(int32_t a, int32_t b) const {
+    const int32_t last = static_cast<int32_t>(table_[0].size()) - 1;
+    a = std::max(a, 0);
+    b = std::min(b, last);
+    if (a > b) return 0;
+    const int level = std::bit_width(static_cast<uint32_t>(b - a + 1)) - 1;
+    const auto& row = table_[static_cast<size_t>(level)];
+    return std::max(row[static_cast<size_t>(a)], row[static_cast<size_t>(b - (1 << level) + 1)]);
+  }
+
+ private:
+  std::vector<std::vector<float>> table_;
+};
+
+struct Quad {
+  const SelectedQuad* selected = nullptr;
+  int64_t ox = 0, oy = 0, scale = 1;  // in cells of the finest selected level
+  geo::GeoBox bounds;
+  double cell = 0;  // degrees per grid cell, along both axes
+  double level_error = 0;
+  std::shared_ptr<const DiamondErrors> errors;  // null: no data, height 0
+  std::unique_ptr<uint8_t[], FreeMarks> marks;
+  std::array<SideMax, 4> edge;  // west, east, north, south
+  uint8_t blocking = 0;         // Side bits: shared with a coarser selected quad
+};
+
+struct Located {
+  int quad;
+  GridPoint p;
+};
+
+class Refiner {
+ public:
+  Refiner(const View& view, TerrainModel& terrain, const Selection& selection,
+          const RefineOptions& options, RefineCache::Impl& cache)
+      : view_(view),
+        terrain_(terrain),
+        selection_(selection),
+        o_(options),
+        cache_(cache),
+        grid_(std::countr_zero(static_cast<uint32_t>(terrain.tile_width()))),
+        top_down_(options.variant == RefineVariant::kTopDown) {}
+
+  Status prepare() {
+    int deepest = 0;
+    bool linked = selection_.quads.size() <= 1;
+    for (const SelectedQuad& q : selection_.quads) {
+      if (q.key.level > terrain_.data_max_level()) {
+        return fail(fmt::format(
+            "refine: quad {} is deeper than the store's finest level {}; cap the selection there",
+            q.key.to_string(), terrain_.data_max_level()));
+      }
+      deepest = std::max(deepest, q.key.level);
+      for (int32_t n : q.neighbours) linked |= n >= 0;
+    }
+    if (!linked) {
+      return fail(
+          "refine: the selection has no neighbour indices (SelectionOptions::neighbour_indices)");
+    }
+    deepest_ = deepest;
+    globe_width_ = int64_t{2} * grid_.n() << deepest;
+    quads_.resize(selection_.quads.size());
+    for (size_t i = 0; i < quads_.size(); ++i)
+      RELIEF_CHECK(prepare(selection_.quads[i], quads_[i]));
+    // A side shared with finer quads is split at its midpoint (their corner).
+    for (size_t i = 0; i < quads_.size(); ++i) {
+      const uint8_t finer = selection_.quads[i].finer_sides;
+      const int32_t n = grid_.n();
+      const int q = static_cast<int>(i);
+      if (finer & kWest) split(q, {0, n / 2});
+      if (finer & kEast) split(q, {2 * n, n / 2});
+      for (int32_t x : {n / 2, 3 * n / 2}) {
+        if (finer & kNorth) split(q, {x, 0});
+        if (finer & kSouth) split(q, {x, n});
+      }
+    }
+    return {};
+  }
+
+  void top_down() {
+    const int32_t n = grid_.n();
+    for (size_t i = 0; i < quads_.size(); ++i) {
+      for (const GridPoint p : {GridPoint{n / 2, 0}, GridPoint{3 * n / 2, 0}, GridPoint{n / 2, n},
+                                GridPoint{3 * n / 2, n}, GridPoint{0, n / 2}, GridPoint{n, n / 2},
+                                GridPoint{2 * n, n / 2}}) {
+        work_.push_back({static_cast<int>(i), p});
+      }
+    }
+    // Split children of splits made while preparing are in work_ already.
+    while (!work_.empty()) {
+      const Located l = work_.back();
+      work_.pop_back();
+      decide(l.quad, l.p);
+    }
+  }
+
+  void bottom_up() {
+    // Finest diamonds first over all quads: class c of a quad of level l has
+    // the size of class c + 2 (deepest - l) of the deepest quads.
+    int last = 0;
+    for (size_t i = 0; i < quads_.size(); ++i) {
+      last = std::max(last, grid_.classes() - 1 + 2 * (deepest_ - level(static_cast<int>(i))));
+    }
+    for (int g = 0; g <= last; ++g) {
+      for (size_t i = 0; i < quads_.size(); ++i) {
+        const int q = static_cast<int>(i);
+        const int c = g - 2 * (deepest_ - level(q));
+        if (c < 0 || c >= grid_.classes()) continue;
+        grid_.for_each_in_class(c, [&](GridPoint p) { decide(q, p); });
+      }
+    }
+  }
+
+  RefinedMesh mesh() {
+    RefinedMesh out;
+    out.grid_k = grid_.k();
+    out.quads.resize(quads_.size());
+    const int32_t n = grid_.n();
+    for (size_t i = 0; i < quads_.size(); ++i) {
+      out.quads[i].first_index = static_cast<uint32_t>(out.indices.size());
+      for (int32_t h = 0; h < 2; ++h) {
+        const GridPoint c{h * n + n / 2, n / 2};
+        const GridPoint nw{h * n, 0}, ne{h * n + n, 0}, se{h * n + n, n}, sw{h * n, n};
+        const std::pair<GridPoint, GridPoint> sides[] = {{nw, ne}, {ne, se}, {se, sw}, {sw, nw}};
+        for (const auto& [a, b] : sides) emit(static_cast<int>(i), c, a, b, out.indices);
+      }
+      out.quads[i].index_count =
+          static_cast<uint32_t>(out.indices.size()) - out.quads[i].first_index;
+    }
+    out.stats = stats_;
+    return out;
+  }
+
+ private:
+  int level(int q) const { return selection_.quads[static_cast<size_t>(q)].key.level; }
+  uint8_t& mark(int q, GridPoint p) { return quads_[static_cast<size_t>(q)].marks[grid_.id(p)]; }
+
+  Status prepare(const SelectedQuad& s, Quad& q) {
+    const int32_t n = grid_.n();
+    q.selected = &s;
+    q.scale = int64_t{1} << (deepest_ - s.key.level);
+    q.ox = int64_t{s.key.x} * 2 * n * q.scale;
+    q.oy = int64_t{s.key.y} * n * q.scale;
+    q.bounds = s.key.bounds();
+    q.cell = q.bounds.height() / n;
+    q.level_error = RELIEF_TRY(terrain_.level_error(s.key));
+    if (q.level_error > 0) {
+      // No split makes up for the distance between the level's full mesh
+      // and the finest data: a quad where that alone may exceed the threshold
+      // refines to its full mesh, and the selection should split it instead.
+      TerrainModel::QuadInfo* info = RELIEF_TRY(terrain_.quad(s.key));
+      if (vertical_error_pixels(view_, info->box, q.bounds, q.level_error) > o_.pixel_error) {
+        ++stats_.too_coarse;
+        stats_.split_wanted.push_back(s.key);
+      }
+    }
+    for (int side = 0; side < 4; ++side) {
+      if ((s.coarse_sides & kSideBits[side]) && s.neighbours[static_cast<size_t>(2 * side)] >= 0) {
+        q.blocking |= kSideBits[side];
+      }
+    }
+    if (const DataWindow w = terrain_.window(s.key); w.tile) {
+      q.errors = RELIEF_TRY(cache_.get(terrain_, grid_, *w.tile, stats_.tiles_measured));
+    }
+    q.marks.reset(static_cast<uint8_t*>(std::calloc(grid_.count(), 1)));
+    if (!q.marks) return fail("refine: out of memory for edge marks");
+    for (int32_t x : {0, n, 2 * n}) {  // the halves' corners and centres
+      q.marks[grid_.id({x, 0})] = q.marks[grid_.id({x, n})] = kSplit;
+    }
+    q.marks[grid_.id({n / 2, n / 2})] = q.marks[grid_.id({3 * n / 2, n / 2})] = kSplit;
+    return prepare_edges(s, q);
+  }
+
+  // Height of grid point p from a data window (0 without data).
+  Result<double> height(const DataWindow& w, GridPoint p) {
+    if (!w.tile) return 0.0;
+    const TerrainModel::TilePtr t = RELIEF_TRY(terrain_.tile(*w.tile));
+    if (!t) return 0.0;
+    const double u = static_cast<double>(p.x) / (2 * grid_.n());
+    const double v = static_cast<double>(p.y) / grid_.n();
+    return TerrainModel::bilinear(*t, terrain_.border(), w.x0 + u * w.width, w.y0 + v * w.height);
+  }
+
+  // |parent - own| heights of the vertices on sides (and at corners) that take
+  // the coarser neighbour's data, as range-maximum tables per side.
+  Status prepare_edges(const SelectedQuad& s, Quad& q) {
+    if (!s.coarse_sides && !s.coarse_corners) return {};
+    const int32_t n = grid_.n();
+    const DataWindow own = terrain_.window(s.key), parent = terrain_.parent_window(s.key);
+    auto at = [&](int side, int32_t t) {
+      return side == 0   ? GridPoint{0, t}
+             : side == 1 ? GridPoint{2 * n, t}
+             : side == 2 ? GridPoint{t, 0}
+                         : GridPoint{t, n};
+    };
+    std::array<std::vector<float>, 4> diff;
+    auto moved = [&](GridPoint p) -> Result<float> {
+      const double d = RELIEF_TRY(height(parent, p)) - RELIEF_TRY(height(own, p));
+      float f = static_cast<float>(std::abs(d));
+      if (static_cast<double>(f) < std::abs(d)) f = std::nextafter(f, INFINITY);
+      return f;
+    };
+    for (int side = 0; side < 4; ++side) {
+      const int32_t length = side < 2 ? n : 2 * n;
+      diff[side].assign(static_cast<size_t>(length) + 1, 0.0f);
+      if (!(s.coarse_sides & kSideBits[side])) continue;
+      for (int32_t t = 0; t <= length; t += 2) diff[side][t] = RELIEF_TRY(moved(at(side, t)));
+    }
+    const struct {
+      uint8_t corner;
+      GridPoint p;
+      int sides[2];
+      int32_t t[2];
+    } corners[] = {{kNorthWest, {0, 0}, {0, 2}, {0, 0}},
+                   {kNorthEast, {2 * n, 0}, {1, 2}, {0, 2 * n}},
+                   {kSouthWest, {0, n}, {0, 3}, {n, 0}},
+                   {kSouthEast, {2 * n, n}, {1, 3}, {n, 2 * n}}};
+    uint8_t used = s.coarse_sides;
+    for (const auto& c : corners) {
+      if (!(s.coarse_corners & c.corner)) continue;
+      const float d = RELIEF_TRY(moved(c.p));
+      for (int k = 0; k < 2; ++k) {
+        diff[c.sides[k]][c.t[k]] = std::max(diff[c.sides[k]][c.t[k]], d);
+        used |= kSideBits[c.sides[k]];
+      }
+    }
+    for (int side = 0; side < 4; ++side) {
+      if (used & kSideBits[side]) q.edge[side].build(diff[side]);
+    }
+    return {};
+  }
+
+  // The same edge mark in the quad across the border, if one is selected.
+  std::optional<Located> mirror(int q, GridPoint p) {
+    const uint8_t sides = grid_.sides(p);
+    if (!sides) return std::nullopt;
+    const int side = (sides & kWest) ? 0 : (sides & kEast) ? 1 : (sides & kNorth) ? 2 : 3;
+    const Quad& from = quads_[static_cast<size_t>(q)];
+    const int64_t gx = from.ox + p.x * from.scale, gy = from.oy + p.y * from.scale;
+    const int32_t n = grid_.n();
+    for (int k = 0; k < 2; ++k) {
+      const int32_t j = from.selected->neighbours[static_cast<size_t>(2 * side + k)];
+      if (j < 0) continue;
+      const Quad& to = quads_[static_cast<size_t>(j)];
+      int64_t along, max;
+      GridPoint out;
+      if (side < 2) {
+        along = gy - to.oy;
+        max = n;
+      } else {
+        along = ((gx - to.ox) % globe_width_ + globe_width_) % globe_width_;
+        max = 2 * n;
+      }
+      if (along % to.scale) continue;  // between the other quad's grid points
+      along /= to.scale;
+      if (along < 0 || along > max) continue;
+      const int32_t a = static_cast<int32_t>(along);
+      out = side == 0   ? GridPoint{2 * n, a}
+            : side == 1 ? GridPoint{0, a}
+            : side == 2 ? GridPoint{a, n}
+                        : GridPoint{a, 0};
+      if (grid_.diamond(out).kind == MarkKind::kVertex) return std::nullopt;
+      return Located{j, out};
+    }
+    return std::nullopt;
+  }
+
+  // Splits a diamond and, to keep the mesh conforming, its parents (forced
+  // splits), the same edge in the neighbouring quad, and so on.
+  void split(int q, GridPoint p) {
+    stack_.push_back({q, p});
+    while (!stack_.empty()) {
+      const Located l = stack_.back();
+      stack_.pop_back();
+      uint8_t& m = mark(l.quad, l.p);
+      if (m == kSplit) continue;
+      m = kSplit;
+      const Diamond d = grid_.diamond(l.p);
+      assert(MarkGrid::splittable(d) && !blocked(l.quad, l.p, d));
+      if (top_down_) {
+        for (const GridPoint& c : d.children(l.p)) {
+          if (grid_.inside(c) && MarkGrid::splittable(grid_.diamond(c))) {
+            work_.push_back({l.quad, c});
+          }
+        }
+      }
+      if (const auto other = mirror(l.quad, l.p)) stack_.push_back(*other);
+      for (const GridPoint& a : d.apexes) {
+        if (grid_.inside(a)) stack_.push_back({l.quad, a});
+      }
+    }
+  }
+
+  // Diamonds that can never split: along a side shared with a coarser quad
+  // that is drawn, a sample's side of that quad (s <= 2 here) and the cells
+  // whose split would need one. (Against a culled quad, vertices may go
+  // anywhere: they take the parent's data all the same.)
+  bool blocked(int q, GridPoint p, const Diamond& d) const {
+    const uint8_t coarse = quads_[static_cast<size_t>(q)].blocking;
+    if (!coarse) return false;
+    const int32_t n = grid_.n();
+    if (d.kind == MarkKind::kDiagonal) {
+      if (d.size != 1) return false;
+      return ((coarse & kWest) && p.x == 1) || ((coarse & kEast) && p.x == 2 * n - 1) ||
+             ((coarse & kNorth) && p.y == 1) || ((coarse & kSouth) && p.y == n - 1);
+    }
+    if (d.size > 2) return false;
+    return ((coarse & kWest) && p.x == 0) || ((coarse & kEast) && p.x == 2 * n) ||
+           ((coarse & kNorth) && p.y == 0) || ((coarse & kSouth) && p.y == n);
+  }
+
+  // Records the coarser neighbour whose side blocks diamond d of quad q.
+  void want_split_across(int q, GridPoint p, const Diamond& d) {
+    if (!blocked(q, p, d)) return;
+    const SelectedQuad& s = selection_.quads[static_cast<size_t>(q)];
+    const int32_t n = grid_.n();
+    const bool near[4] = {p.x <= 1, p.x >= 2 * n - 1, p.y <= 1, p.y >= n - 1};
+    const int offset[4][2] = {{-1, 0}, {1, 0}, {0, -1}, {0, 1}};
+    for (int side = 0; side < 4; ++side) {
+      if (!near[side] || !(quads_[static_cast<size_t>(q)].blocking & kSideBits[side])) continue;
+      // The coarser neighbour is one level up (restricted quadtree), culled or not.
+      const auto across = s.key.neighbour(offset[side][0], offset[side][1]);
+      if (!across || !across->parent()) continue;
+      auto& wanted = stats_.split_wanted;
+      if (std::find(wanted.begin(), wanted.end(), *across->parent()) == wanted.end()) {
+        wanted.push_back(*across->parent());
+      }
+    }
+  }
+
+  // The split criterion's value for the part of diamond d inside quad q: the
+  // screen bound of its error in a box around it and its descendants (nested
+  // in its parents' boxes, so the value never grows from parent to child).
+  double pixels(int q, GridPoint p, const Diamond& d) {
+    const Quad& quad = quads_[static_cast<size_t>(q)];
+    const int32_t n = grid_.n();
+    double error = 0, lo = 0, hi = 0;
+    if (quad.errors) {
+      const uint32_t id = grid_.id(p);
+      error = quad.errors->error[id];
+      lo = quad.errors->lo[id];
+      hi = quad.errors->hi[id];
+    }
+    const int32_t r = d.reach();
+    double edge = 0;
+    if (!quad.edge[0].empty() && p.x - r <= 0)
+      edge = std::max<double>(edge, quad.edge[0].max(p.y - r, p.y + r));
+    if (!quad.edge[1].empty() && p.x + r >= 2 * n)
+      edge = std::max<double>(edge, quad.edge[1].max(p.y - r, p.y + r));
+    if (!quad.edge[2].empty() && p.y - r <= 0)
+      edge = std::max<double>(edge, quad.edge[2].max(p.x - r, p.x + r));
+    if (!quad.edge[3].empty() && p.y + r >= n)
+      edge = std::max<double>(edge, quad.edge[3].max(p.x - r, p.x + r));
+    const double theta = d.hypotenuse() * quad.cell * kDegree;
+    const double pad = quad.level_error + edge + kArc * theta * theta / 8;
+    const double metres = error + pad;
+    const double lon = quad.bounds.west + p.x * quad.cell,
+                 lat = quad.bounds.north - p.y * quad.cell;
+    const geo::GeoBox area{lon - r * quad.cell, lat - r * quad.cell, lon + r * quad.cell,
+                           lat + r * quad.cell};
+    const double radius = kArc * std::sqrt(2.0) * r * quad.cell * kDegree + (hi - lo) / 2 + pad;
+    const Vec3 c = ecef(lon, lat, (lo + hi) / 2);
+    // Most diamonds are far below the threshold: the distance bound of
+    // vertical_error_pixels, from a nearer point than the box's, settles them.
+    const double near = length(c - view_.eye) - std::sqrt(3.0) * radius;
+    if (near > 0) {
+      const double corner =
+          view_.tan_half_x * view_.tan_half_x + view_.tan_half_y * view_.tan_half_y;
+      const double bound = view_.pixels_per_radian * metres * (1 + corner) / near;
+      if (bound <= o_.pixel_error) return bound;
+    }
+    const Box box{c - Vec3{radius, radius, radius}, c + Vec3{radius, radius, radius}};
+    return vertical_error_pixels(view_, box, area, metres);
+  }
+
+  // Evaluates the split criterion of an undecided mark (for both quads when
+  // it lies on their shared side) and splits it or keeps it.
+  void decide(int q, GridPoint p) {
+    uint8_t& m = mark(q, p);
+    if (m != kUnknown) return;
+    const Diamond d = grid_.diamond(p);
+    if (!MarkGrid::splittable(d)) return;
+    ++stats_.marks_evaluated;
+    const std::optional<Located> other = mirror(q, p);
+    double px = pixels(q, p, d);
+    bool stuck = blocked(q, p, d);
+    // The half across a side shared with a finer quad may be a sample's
+    // side there (the finer quad's mark is blocked then): that half is the
+    // coarser quad's full mesh already, nothing to split.
+    if (other && MarkGrid::splittable(grid_.diamond(other->p))) {
+      const Diamond od = grid_.diamond(other->p);
+      px = std::max(px, pixels(other->quad, other->p, od));
+      stuck |= blocked(other->quad, other->p, od);
+    }
+    if (px > o_.pixel_error && !stuck) {
+      split(q, p);
+      return;
+    }
+    if (px > o_.pixel_error) {
+      ++stats_.unresolved;
+      stats_.max_unresolved_pixels = std::max(stats_.max_unresolved_pixels, px);
+      want_split_across(q, p, d);
+      if (other) want_split_across(other->quad, other->p, grid_.diamond(other->p));
+    }
+    m = kKept;
+    if (other && mark(other->quad, other->p) == kUnknown) mark(other->quad, other->p) = kKept;
+  }
+
+  // The triangle with right angle at r and hypotenuse (a, b), or its children.
+  void emit(int q, GridPoint r, GridPoint a, GridPoint b, std::vector<uint32_t>& out) {
+    const GridPoint m{(a.x + b.x) / 2, (a.y + b.y) / 2};
+    if (mark(q, m) == kSplit && MarkGrid::splittable(grid_.diamond(m))) {
+      emit(q, m, a, r, out);
+      emit(q, m, r, b, out);
+      return;
+    }
+    // Counter-clockwise seen from above: in (x, -y), as MeshTopology.
+    const int64_t area = int64_t{a.x - r.x} * (r.y - b.y) - int64_t{r.y - a.y} * (b.x - r.x);
+    if (area < 0) std::swap(a, b);
+    out.insert(out.end(), {grid_.id(r), grid_.id(a), grid_.id(b)});
+  }
+
+  const View& view_;
+  TerrainModel& terrain_;
+  const Selection& selection_;
+  const RefineOptions& o_;
+  RefineCache::Impl& cache_;
+  MarkGrid grid_;
+  int deepest_ = 0;
+  int64_t globe_width_ = 0;
+  std::vector<Quad> quads_;
+  bool top_down_;
+  std::vector<Located> stack_, work_;
+  RefineStats stats_;
+};
+
+}  // namespace
+
+Result<RefinedMesh> refine(const View& view, TerrainModel& terrain, const Selection& selection,
+                           const RefineOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  RefineCache local(0);
+  RefineCache& cache = options.cache ? *options.cache : local;
+  Refiner r(view, terrain, selection, options, cache.impl());
+  RELIEF_CHECK(r.prepare());
+  if (options.variant == RefineVariant::kTopDown) {
+    r.top_down();
+  } else {
+    r.bottom_up();
+  }
+  RefinedMesh mesh = r.mesh();
+  mesh.stats.seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return mesh;
+}
+
+}  // namespace relief::lod

@@ -1,0 +1,465 @@
+// Edge-mark refinement (lod/refine.h) on real terrain: the Pyrenees pair and
+// the Scotland pair (55N, west of Greenwich). The refined mesh is evaluated
+// from scratch as the renderer draws it (grid vertex heights from the quad's
+// data window, the parent's on sides and corners shared with a coarser quad;
+// flat triangles between the vertices placed in ECEF), independently of the
+// refinement's error estimates, and compared with every finest sample it
+// covers on screen.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <random>
+#include <stdexcept>
+#include <string>
+#include <unordered_map>
+#include <unordered_set>
+
+#include "../ingest/built_stores.h"
+#include "../support/test_support.h"
+#include "relief/lod/mesh_evaluator.h"
+#include "relief/lod/refine.h"
+
+namespace relief::lod {
+namespace {
+
+const tiles::Store& scotland_store() {
+  ingest::BuildOptions o;
+  o.inputs = {relief::testing::data("srtm/N55W004.hgt.zip"),
+              relief::testing::data("srtm/N55W003.hgt.zip")};
+  o.kind = tiles::DatasetKind::Elevation;
+  return relief::testing::built_store("scotland", o);
+}
+
+struct Terrain {
+  explicit Terrain(const tiles::Store& s) : store(s), terrain(&s, mesh, uint64_t{512} << 20) {}
+  const tiles::Store& store;
+  MeshTopology mesh{4};
+  TerrainModel terrain;
+  RefineCache cache{uint64_t{1} << 30};
+};
+
+Terrain& pyrenees() {
+  static Terrain t(relief::testing::pyrenees_store());
+  return t;
+}
+Terrain& scotland() {
+  static Terrain t(scotland_store());
+  return t;
+}
+
+// The quad selection refinement starts from (LodMode::edge_marks): capped at
+// the store's finest level, and with level errors, which refinement cannot
+// reduce, projecting to at most `level_error_share` of `pixel_error`.
+Selection select(Terrain& t, const View& view, double pixel_error, double level_error_share = 0.5) {
+  SelectionOptions o;
+  o.pixel_error = pixel_error;
+  o.mode = LodMode::edge_marks;
+  o.level_error_share = level_error_share;
+  o.neighbour_indices = true;
+  auto s = select_quads(view, t.terrain, o);
+  EXPECT_TRUE(s) << s.error().message;
+  return s ? std::move(*s) : Selection{};
+}
+
+RefinedMesh refined(Terrain& t, const View& view, const Selection& s, double pixel_error,
+                    RefineVariant variant) {
+  RefineOptions o;
+  o.pixel_error = pixel_error;
+  o.variant = variant;
+  o.cache = &t.cache;
+  auto mesh = refine(view, t.terrain, s, o);
+  EXPECT_TRUE(mesh) << mesh.error().message;
+  return mesh ? std::move(*mesh) : RefinedMesh{};
+}
+
+struct GridPos {
+  int x = 0, y = 0;
+};
+
+// The refined mesh as the renderer draws it.
+class RefinedEvaluator {
+ public:
+  RefinedEvaluator(TerrainModel& terrain, const Selection& s, const RefinedMesh& m)
+      : terrain_(terrain), selection_(s), mesh_(m), eval_(terrain, s), n_(1 << m.grid_k) {
+    triangles_.resize(s.quads.size());
+    for (size_t q = 0; q < s.quads.size(); ++q) {
+      index_[s.quads[q].key] = q;
+      const RefinedQuad& rq = m.quads[q];
+      for (uint32_t i = rq.first_index; i < rq.first_index + rq.index_count; i += 3) {
+        triangles_[q].insert(key(m.indices[i], m.indices[i + 1], m.indices[i + 2]));
+      }
+    }
+  }
+
+  GridPos pos(uint32_t id) const {
+    const int c = static_cast<int>(mesh_.grid_columns());
+    return {static_cast<int>(id) % c, static_cast<int>(id) / c};
+  }
+  uint32_t id(GridPos p) const { return static_cast<uint32_t>(p.y) * mesh_.grid_columns() + p.x; }
+
+  // Lon/lat of grid point p of quad q (exact: dyadic fractions).
+  std::pair<double, double> lonlat(const SelectedQuad& q, GridPos p) const {
+    const geo::GeoBox b = q.key.bounds();
+    double lon = b.west + p.x / (2.0 * n_) * b.width();
+    if (lon >= 180) lon -= 360;
+    return {lon, b.north - p.y / double(n_) * b.height()};
+  }
+
+  // Height of grid point p of quad q as the vertex shader computes it.
+  double height(const SelectedQuad& q, GridPos p) {
+    MeshVertex v;
+    v.u = static_cast<float>(p.x / (2.0 * n_));
+    v.v = static_cast<float>(p.y / double(n_));
+    if (p.x == 0) v.sides |= kWest;
+    if (p.x == 2 * n_) v.sides |= kEast;
+    if (p.y == 0) v.sides |= kNorth;
+    if (p.y == n_) v.sides |= kSouth;
+    const uint8_t s = v.sides;
+    if ((s & kNorth) && (s & kWest)) v.corner = kNorthWest;
+    if ((s & kNorth) && (s & kEast)) v.corner = kNorthEast;
+    if ((s & kSouth) && (s & kWest)) v.corner = kSouthWest;
+    if ((s & kSouth) && (s & kEast)) v.corner = kSouthEast;
+    auto h = eval_.vertex_height(q, v);
+    EXPECT_TRUE(h);
+    return h ? *h : NAN;
+  }
+
+  const SelectedQuad* containing(double lon, double lat) const {
+    return eval_.containing(lon, lat);
+  }
+
+  // The mesh point above (lon, lat) in quad q: its triangle found by
+  // descending the 4-8 hierarchy to a triangle of the mesh.
+  std::optional<Vec3> point(const SelectedQuad& q, double lon, double lat) {
+    const size_t qi = index_.at(q.key);
+    const geo::GeoBox b = q.key.bounds();
+    const double cell = b.height() / n_;
+    const double gx = (lon - b.west) / cell, gy = (b.north - lat) / cell;
+    const int h = gx < n_ ? 0 : 1;
+    const GridPos c{h * n_ + n_ / 2, n_ / 2}, nw{h * n_, 0}, ne{h * n_ + n_, 0},
+        se{h * n_ + n_, n_}, sw{h * n_, n_};
+    const GridPos roots[4][2] = {{nw, ne}, {ne, se}, {se, sw}, {sw, nw}};
+    GridPos t[3];
+    bool found = false;
+    double w[3];
+    for (const auto& r : roots) {
+      if (inside(c, r[0], r[1], gx, gy, w)) {
+        t[0] = c, t[1] = r[0], t[2] = r[1];
+        found = true;
+        break;
+      }
+    }
+    if (!found) return std::nullopt;
+    for (int depth = 0; depth < 40; ++depth) {
+      if (triangles_[qi].contains(key(id(t[0]), id(t[1]), id(t[2])))) {
+        Vec3 out;
+        for (int k = 0; k < 3; ++k) {
+          const auto [vlon, vlat] = lonlat(q, t[k]);
+          out = out + ecef(vlon, vlat, height(q, t[k])) * w[k];
+        }
+        return out;
+      }
+      const GridPos m{(t[1].x + t[2].x) / 2, (t[1].y + t[2].y) / 2};
+      const GridPos r = t[0], a = t[1], bb = t[2];
+      if (inside(m, a, r, gx, gy, w)) {
+        t[0] = m, t[1] = a, t[2] = r;
+      } else if (inside(m, r, bb, gx, gy, w)) {
+        t[0] = m, t[1] = r, t[2] = bb;
+      } else {
+        return std::nullopt;
+      }
+    }
+    return std::nullopt;
+  }
+
+ private:
+  static uint64_t key(uint32_t a, uint32_t b, uint32_t c) {
+    uint32_t v[3] = {a, b, c};
+    std::sort(v, v + 3);
+    return uint64_t{v[0]} << 42 | uint64_t{v[1]} << 21 | v[2];
+  }
+  // Barycentric weights of (x, y) in triangle (p0, p1, p2), with a tolerance.
+  static bool inside(GridPos p0, GridPos p1, GridPos p2, double x, double y, double* w) {
+    const double d = double(p1.x - p0.x) * (p2.y - p0.y) - double(p2.x - p0.x) * (p1.y - p0.y);
+    const double s = ((x - p0.x) * (p2.y - p0.y) - (p2.x - p0.x) * (y - p0.y)) / d;
+    const double r = ((p1.x - p0.x) * (y - p0.y) - (x - p0.x) * (p1.y - p0.y)) / d;
+    if (s < -1e-9 || r < -1e-9 || s + r > 1 + 1e-9) return false;
+    w[0] = 1 - s - r, w[1] = s, w[2] = r;
+    return true;
+  }
+
+  TerrainModel& terrain_;
+  const Selection& selection_;
+  const RefinedMesh& mesh_;
+  MeshEvaluator eval_;
+  int n_;
+  std::vector<std::unordered_set<uint64_t>> triangles_;
+  std::unordered_map<geo::TileKey, size_t, geo::TileKeyHash> index_;
+};
+
+// Projected distance between finest samples and the refined mesh above them:
+// `per_quad` random finest samples in each selected quad, those on screen.
+// None is excluded: voids are height 0 in the decoded tiles the mesh is made
+// of, and quads without data draw the ellipsoid (no finest samples).
+struct Measured {
+  size_t compared = 0;
+  double worst = 0;
+};
+
+Measured measure(Terrain& t, const View& view, const Selection& s, const RefinedMesh& m,
+                 int per_quad) {
+  RefinedEvaluator eval(t.terrain, s, m);
+  const int finest = t.terrain.data_max_level();
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> unit(0, 1);
+  Measured out;
+  for (const SelectedQuad& sq : s.quads) {
+    const geo::GeoBox b = sq.key.bounds();
+    // Half of them along the sides, within two of the quad's samples, where
+    // quads of different levels meet.
+    const double band = 2.0 / t.terrain.tile_width();
+    for (int k = 0; k < per_quad; ++k) {
+      double u = unit(rng), v = unit(rng);
+      if (k % 2) {
+        const uint32_t side = rng() % 4;
+        (side < 2 ? u : v) = side % 2 ? 1 - band * unit(rng) : band * unit(rng);
+      }
+      const geo::SampleIndex si =
+          t.store.grid().locate(finest, b.west + u * b.width(), b.south + v * b.height());
+      if (!t.store.has_tile(si.tile)) continue;  // no data here: the ellipsoid
+      auto tile = t.terrain.tile(si.tile);
+      EXPECT_TRUE(tile);
+      const double lon = t.store.grid().sample_lon(si.tile, si.i);
+      const double lat = t.store.grid().sample_lat(si.tile, si.j);
+      const float h =
+          (*tile)->f32()[static_cast<size_t>(si.j + t.terrain.border()) * (*tile)->width() + si.i +
+                         t.terrain.border()];
+      const SelectedQuad* q = eval.containing(lon, lat);
+      if (!q) continue;  // culled
+      const auto on_mesh = eval.point(*q, lon, lat);
+      EXPECT_TRUE(on_mesh) << "no triangle of " << q->key.to_string() << " holds " << lon << ","
+                           << lat;
+      if (!on_mesh) continue;
+      double ax, ay, bx, by;
+      if (!view.project(ecef(lon, lat, h), ax, ay) || !view.project(*on_mesh, bx, by)) continue;
+      if (ax < 0 || ay < 0 || ax >= view.width || ay >= view.height) continue;
+      out.worst = std::max(out.worst, std::hypot(ax - bx, ay - by));
+      ++out.compared;
+    }
+  }
+  return out;
+}
+
+struct Case {
+  const char* name;
+  Terrain& (*terrain)();
+  Camera camera;
+  double pixel_error;
+};
+
+// The views of error_bound_test, a grazing one, and one at 55N west of Greenwich.
+std::vector<Case> cases() {
+  return {
+      {"oblique", pyrenees, look_at(1.45, 42.55, 1500, 30000, 20, -35, 60, 640, 480), 1.0},
+      {"low", pyrenees, look_at(1.6, 42.4, 1200, 15000, 200, -15, 60, 640, 480), 1.0},
+      {"down", pyrenees, look_at(1.5, 42.6, 2000, 60000, 0, -80, 45, 512, 512), 2.0},
+      {"grazing", pyrenees, look_at(1.3, 42.45, 1500, 8000, 100, -4, 60, 640, 480), 1.0},
+      {"scotland", scotland, look_at(-3.2, 55.5, 300, 20000, 300, -30, 60, 640, 480), 1.0},
+  };
+}
+
+const Case& case_named(const std::string& name) {
+  static const std::vector<Case> all = cases();
+  for (const Case& c : all) {
+    if (name == c.name) return c;
+  }
+  throw std::runtime_error("no case " + name);
+}
+
+TEST(Refine, FinestSamplesProjectWithinThePixelError) {
+  for (const Case& c : cases()) {
+    SCOPED_TRACE(c.name);
+    Terrain& t = c.terrain();
+    auto view = make_view(c.camera);
+    ASSERT_TRUE(view);
+    const Selection s = select(t, *view, c.pixel_error);
+    for (RefineVariant v : {RefineVariant::kTopDown, RefineVariant::kBottomUp}) {
+      // Bottom-up decides every mark of every quad (seconds): one view here,
+      // BothVariantsGiveTheSameMesh covers the rest.
+      if (v == RefineVariant::kBottomUp && std::string(c.name) != "down") continue;
+      const RefinedMesh m = refined(t, *view, s, c.pixel_error, v);
+      EXPECT_EQ(m.stats.unresolved, 0u);
+      EXPECT_EQ(m.stats.too_coarse, 0u);
+      EXPECT_TRUE(m.stats.split_wanted.empty());
+      const Measured e = measure(t, *view, s, m, 400);
+      EXPECT_GT(e.compared, 1000u);
+      EXPECT_LE(e.worst, c.pixel_error) << e.worst << " px over " << e.compared << " samples";
+    }
+  }
+}
+
+TEST(Refine, BothVariantsGiveTheSameMesh) {
+  for (const char* name : {"down", "scotland"}) {
+    SCOPED_TRACE(name);
+    const Case& c = case_named(name);
+    Terrain& t = c.terrain();
+    auto view = make_view(c.camera);
+    ASSERT_TRUE(view);
+    const Selection s = select(t, *view, c.pixel_error);
+    for (double pixel_error : {c.pixel_error, 4 * c.pixel_error}) {
+      const RefinedMesh a = refined(t, *view, s, pixel_error, RefineVariant::kTopDown);
+      const RefinedMesh b = refined(t, *view, s, pixel_error, RefineVariant::kBottomUp);
+      EXPECT_GT(a.triangles(), 8 * s.quads.size());
+      EXPECT_EQ(a.indices, b.indices);
+      ASSERT_EQ(a.quads.size(), b.quads.size());
+      for (size_t i = 0; i < a.quads.size(); ++i) {
+        EXPECT_EQ(a.quads[i].first_index, b.quads[i].first_index);
+        EXPECT_EQ(a.quads[i].index_count, b.quads[i].index_count);
+      }
+      // Top-down evaluates a small part of the marks bottom-up does.
+      EXPECT_LT(a.stats.marks_evaluated * 10, b.stats.marks_evaluated);
+    }
+  }
+}
+
+TEST(Refine, FewerTrianglesThanTheFullMeshAndFewerForLargerErrors) {
+  Terrain& t = pyrenees();
+  const uint64_t full_per_quad = uint64_t{4} * t.terrain.tile_width() * t.terrain.tile_height();
+  {
+    const Case& c = case_named("oblique");
+    auto view = make_view(c.camera);
+    ASSERT_TRUE(view);
+    const Selection s = select(t, *view, 1.0);
+    uint64_t previous = UINT64_MAX;
+    for (double pixel_error : {0.5, 1.0, 2.0, 4.0, 8.0}) {
+      const RefinedMesh m = refined(t, *view, s, pixel_error, RefineVariant::kTopDown);
+      EXPECT_LE(m.triangles(), previous) << pixel_error << " px";
+      EXPECT_LT(m.triangles(), full_per_quad * s.quads.size());
+      previous = m.triangles();
+    }
+  }
+  // A selection too coarse for the threshold (level errors over it) refines
+  // its coarse quads to their full mesh and says so.
+  {
+    auto view = make_view(look_at(1.5, 42.5, 1500, 400000, 30, -60, 60, 640, 480));
+    ASSERT_TRUE(view);
+    const Selection coarse = select(t, *view, 2.0, 8.0), fine = select(t, *view, 2.0);
+    const RefinedMesh a = refined(t, *view, coarse, 2.0, RefineVariant::kTopDown);
+    const RefinedMesh b = refined(t, *view, fine, 2.0, RefineVariant::kTopDown);
+    EXPECT_GT(a.stats.too_coarse, 0u);
+    EXPECT_EQ(a.stats.split_wanted.size(), a.stats.too_coarse);
+    for (const geo::TileKey& k : a.stats.split_wanted) {
+      EXPECT_LT(k.level, t.terrain.data_max_level());
+      EXPECT_TRUE(std::any_of(coarse.quads.begin(), coarse.quads.end(),
+                              [&](const SelectedQuad& q) { return q.key == k; }));
+    }
+    EXPECT_EQ(b.stats.too_coarse, 0u);
+    EXPECT_LT(b.triangles() * 4, a.triangles());
+  }
+  // From far away, a few triangles per quad.
+  auto view = make_view(look_at(1.5, 42.5, 1500, 400000, 30, -60, 60, 640, 480));
+  ASSERT_TRUE(view);
+  const Selection s = select(t, *view, 1.0);
+  const RefinedMesh m = refined(t, *view, s, 1.0, RefineVariant::kTopDown);
+  EXPECT_LT(m.triangles() * 100, full_per_quad * s.quads.size());
+  EXPECT_LT(m.triangles(), uint64_t{2} * view->width * view->height);
+}
+
+// Every triangle edge is shared by exactly two triangles, except on the sides
+// of the selection's boundary (culled neighbours): no cracks, no T-junctions.
+// Vertices shared by quads of equal and different levels get bit-identical
+// heights.
+void expect_conforming(Terrain& t, const Selection& s, const RefinedMesh& m) {
+  RefinedEvaluator eval(t.terrain, s, m);
+  using Point = std::pair<double, double>;
+  std::map<std::pair<Point, Point>, std::pair<int, bool>> edges;  // count, on an open side
+  std::map<Point, std::pair<double, size_t>> heights;             // height, quad
+  size_t shared = 0, across_levels = 0;
+  const int n = 1 << m.grid_k;
+  for (size_t qi = 0; qi < s.quads.size(); ++qi) {
+    const SelectedQuad& q = s.quads[qi];
+    const RefinedQuad& rq = m.quads[qi];
+    // An edge on a side with no selected quad across it (culled).
+    auto open = [&](GridPos a, GridPos b) {
+      const int dx = a.x == 0 && b.x == 0 ? -1 : a.x == 2 * n && b.x == 2 * n ? 1 : 0;
+      const int dy = a.y == 0 && b.y == 0 ? 1 : a.y == n && b.y == n ? -1 : 0;
+      if (!dx && !dy) return false;
+      const geo::GeoBox box = q.key.bounds();
+      const double cell = box.height() / n, step = 1e-7;
+      double lon = box.west + (a.x + b.x) / 2.0 * cell + dx * step;
+      const double lat = box.north - (a.y + b.y) / 2.0 * cell + dy * step;
+      if (lon < -180) lon += 360;
+      if (lon >= 180) lon -= 360;
+      return !eval.containing(lon, lat);
+    };
+    for (uint32_t i = rq.first_index; i < rq.first_index + rq.index_count; i += 3) {
+      for (int e = 0; e < 3; ++e) {
+        const GridPos a = eval.pos(m.indices[i + e]), b = eval.pos(m.indices[i + (e + 1) % 3]);
+        Point pa = eval.lonlat(q, a), pb = eval.lonlat(q, b);
+        if (pb < pa) std::swap(pa, pb);
+        auto& edge = edges[{pa, pb}];
+        ++edge.first;
+        edge.second |= open(a, b);
+        if (!(a.x == 0 || a.y == 0 || a.x == 2 * n || a.y == n)) continue;
+        const double h = eval.height(q, a);
+        auto [it, fresh] = heights.try_emplace(eval.lonlat(q, a), h, qi);
+        if (fresh || it->second.second == qi) continue;
+        ++shared;
+        across_levels += s.quads[it->second.second].key.level != q.key.level;
+        ASSERT_EQ(it->second.first, h)
+            << q.key.to_string() << " and " << s.quads[it->second.second].key.to_string() << " at "
+            << it->first.first << "," << it->first.second;
+      }
+    }
+  }
+  size_t inner = 0;
+  for (const auto& [edge, c] : edges) {
+    const bool pole = std::abs(edge.first.second) == 90 && edge.first.second == edge.second.second;
+    if (c.first == 1 && (c.second || pole)) continue;
+    ASSERT_EQ(c.first, 2) << "edge (" << edge.first.first << "," << edge.first.second << ")-("
+                          << edge.second.first << "," << edge.second.second << ")";
+    ++inner;
+  }
+  EXPECT_GT(inner, 10000u);
+  EXPECT_GT(shared, 1000u);
+  EXPECT_GT(across_levels, 20u);
+}
+
+TEST(Refine, ConformingMeshesWithBitIdenticalSharedVertices) {
+  for (const char* name : {"oblique", "low", "grazing", "scotland"}) {
+    SCOPED_TRACE(name);
+    const Case& c = case_named(name);
+    Terrain& t = c.terrain();
+    auto view = make_view(c.camera);
+    ASSERT_TRUE(view);
+    const Selection s = select(t, *view, c.pixel_error);
+    expect_conforming(t, s, refined(t, *view, s, c.pixel_error, RefineVariant::kTopDown));
+  }
+}
+
+TEST(Refine, RefusesQuadsDeeperThanTheDataAndSelectionsWithoutNeighbours) {
+  Terrain& t = pyrenees();
+  auto view = make_view(case_named("low").camera);
+  ASSERT_TRUE(view);
+  SelectionOptions o;
+  o.neighbour_indices = true;
+  auto deep = select_quads(*view, t.terrain, o);  // down to max_level(), below the data
+  ASSERT_TRUE(deep);
+  ASSERT_GT(t.terrain.max_level(), t.terrain.data_max_level());
+  auto m = refine(*view, t.terrain, *deep, RefineOptions{});
+  ASSERT_FALSE(m);
+  EXPECT_NE(m.error().message.find("deeper than the store's finest level"), std::string::npos)
+      << m.error().message;
+  o.max_level = t.terrain.data_max_level();
+  o.neighbour_indices = false;
+  auto unlinked = select_quads(*view, t.terrain, o);
+  ASSERT_TRUE(unlinked);
+  m = refine(*view, t.terrain, *unlinked, RefineOptions{});
+  ASSERT_FALSE(m);
+  EXPECT_NE(m.error().message.find("neighbour_indices"), std::string::npos) << m.error().message;
+}
+
+}  // namespace
+}  // namespace relief::lod
