@@ -82,11 +82,11 @@ uint64_t max_file_bytes(const std::string& relative, const std::optional<TileSha
   }
   // Any other file is not one of a store's: the manifest's cap bounds it.
   if (!relative.ends_with(kLevelIndexName)) return kMaxManifestBytes;
-  // "L/index.rli": header, presence bitmap and a 16-byte record per tile.
+  // "L/index.rli": header, presence bitmap and a record per tile.
   const int level = std::atoi(relative.c_str());
   if (level < 0 || level > 13) return kMaxLevelIndexBytes;
   const uint64_t tiles = uint64_t{1} << (2 * level);
-  return std::min(kMaxLevelIndexBytes, 64 + tiles / 8 + 16 * tiles);
+  return std::min(kMaxLevelIndexBytes, 64 + tiles / 8 + kLevelIndexRecordSize * tiles);
 }
 
 uint64_t FileCaps::cap(const std::string& relative) const {
