@@ -44,6 +44,18 @@ std::string predates_geometric_errors(const std::string& file) {
       file, store.empty() ? std::string("STORE") : store.string());
 }
 
+std::optional<int> manifest_format_version(const std::string& text) {
+  const json j = json::parse(text, nullptr, false);
+  if (!j.is_object()) return std::nullopt;
+  const auto format = j.find("format");
+  if (format == j.end() || !format->is_string() || *format != "relief-store") return std::nullopt;
+  const auto it = j.find("format_version");
+  if (it == j.end() || !it->is_number_integer() || !std::in_range<int>(it->get<int64_t>())) {
+    return std::nullopt;
+  }
+  return it->get<int>();
+}
+
 std::string_view to_string(DatasetKind k) {
   switch (k) {
     case DatasetKind::Elevation:
