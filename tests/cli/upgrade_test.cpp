@@ -55,9 +55,9 @@ std::vector<std::byte> as_version1(const std::vector<std::byte>& v2) {
 class Upgrade : public SmallStoreSuite {
  protected:
   // A copy of the store as relief wrote it before geometric errors.
-  fs::path format_one_copy(const std::string& name) {
+  fs::path format_one_copy(const std::string& name, const fs::path& from = store()) {
     const fs::path old = dir_ / name;
-    fs::copy(store(), old, fs::copy_options::recursive);
+    fs::copy(from, old, fs::copy_options::recursive);
     for (const auto& entry : fs::recursive_directory_iterator(old)) {
       if (entry.path().filename() != tiles::kLevelIndexName) continue;
       EXPECT_TRUE(write_file_atomic(entry.path(), as_version1(bytes_of(entry.path()))));
@@ -119,6 +119,24 @@ TEST_F(Upgrade, GivesWhatAFreshBuildWrites) {
   r = run_relief({"upgrade", old.string(), "-q"});
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("already at store format version 2"), std::string::npos) << r.out;
+}
+
+// Imagery has no heights: errors 0, only the format changes.
+TEST_F(Upgrade, ImageryStoresOnlyChangeFormat) {
+  const fs::path fresh = dir_ / "rgb";
+  ASSERT_EQ(run_relief({"build", data("imagery/RGB.byte.tif"), "--kind", "imagery", "-o",
+                        fresh.string(), "-q"})
+                .exit_code,
+            0);
+  const fs::path old = format_one_copy("rgb_old", fresh);
+  auto r = run_relief({"upgrade", old.string(), "-q"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(metadata(old), metadata(fresh));
+  auto opened = tiles::Store::open(old);
+  ASSERT_TRUE(opened) << opened.error().message;
+  for (int l = opened->manifest().min_level; l <= opened->manifest().max_level; ++l) {
+    for (const auto& e : opened->index(l).entries()) EXPECT_EQ(e.error, 0.0f);
+  }
 }
 
 TEST_F(Upgrade, AFailedUpgradeWritesNothing) {
