@@ -72,6 +72,21 @@ TEST(GeometricError, EqualsABruteForceRecomputation) {
   EXPECT_GT(positive, 20);
 }
 
+// A lossy store's errors are those of the samples readers decode, not of the
+// samples the build encoded.
+TEST(GeometricError, OfALossyStoreAreThoseOfTheDecodedSamples) {
+  BuildOptions o;
+  o.inputs = testing::pyrenees_inputs();
+  o.kind = tiles::DatasetKind::Elevation;
+  o.max_error = 0.5;
+  const tiles::Store& store = testing::built_store("pyrenees_pair_lerc", o);
+  ASSERT_EQ(store.manifest().codec.codec, tiles::Codec::Lerc);
+  const int level = store.manifest().max_level - 1;
+  for (const tiles::IndexEntry& e : store.index(level).entries()) {
+    EXPECT_EQ(e.error, brute_force_error(store, e.key)) << e.key.to_string();
+  }
+}
+
 TEST(GeometricError, RoundsUpToFloat) {
   const double d = 0.1;  // not a float
   EXPECT_GE(static_cast<double>(tiles::round_up_to_float(d)), d);
