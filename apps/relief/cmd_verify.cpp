@@ -10,7 +10,9 @@ namespace {
 constexpr const char* kHelp = R"(usage: relief verify STORE [--threads N] [-q]
 
 Checks the manifest, every level index and every tile (header, checksum,
-payload). Prints one line per bad file and exits non-zero if any is found.
+payload), and for an elevation store recomputes every tile's geometric error
+and compares it with the level index. Prints one line per problem and exits
+non-zero if any is found.
 )";
 }  // namespace
 

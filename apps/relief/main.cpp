@@ -17,6 +17,7 @@ commands:
   build    turn rasters (GeoTIFF, SRTM .hgt, VRT, DTED, ...) into a tile pyramid store
   info     describe a store: manifest, tiles and bytes per level, compression
   verify   check every tile header and checksum of a store
+  upgrade  bring a store written by an older relief up to the current format
   export   reassemble one level of a store into a GeoTIFF
   process  run an operator (speckle filter, dynamic-range reduction, ...) over a GeoTIFF or a store
   fuse     combine stores of one kind tile by tile (weighted blend or void filling)
@@ -64,6 +65,7 @@ int main(int argc, char** argv) {
     if (command == "build") return relief::cli::run_build(args);
     if (command == "info") return relief::cli::run_info(args);
     if (command == "verify") return relief::cli::run_verify(args);
+    if (command == "upgrade") return relief::cli::run_upgrade(args);
     if (command == "export") return relief::cli::run_export(args);
     if (command == "process") return relief::cli::run_process(args);
     if (command == "fuse") return relief::cli::run_fuse(args);

@@ -9,6 +9,7 @@
 #include "../support/test_support.h"
 #include "level_image.h"
 #include "relief/pipeline/fuse_stores.h"
+#include "relief/tiles/verify.h"
 
 namespace relief::testing {
 namespace {
@@ -57,6 +58,12 @@ TEST(Fuse, TwoTilesFusedMatchTheStoreBuiltFromBoth) {
   EXPECT_LT(worst, 20.0);
   EXPECT_LT(differing, valid / 500);
   EXPECT_EQ(fused.manifest().sources.size(), 2u);
+  // The fused store carries its own geometric errors: verify recomputes them.
+  ThreadExecutor ex(2);
+  NullProgress progress;
+  const tiles::VerifyReport report = tiles::verify_store(fused.root(), ex, progress);
+  EXPECT_TRUE(report.ok()) << (report.ok() ? "" : report.problems.front());
+  EXPECT_GT(fused.index(level - 1).entries().front().error, 0.0f);
 }
 
 TEST(Fuse, WeightsModesAndBoundsWithoutScanning) {

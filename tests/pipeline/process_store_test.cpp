@@ -11,6 +11,7 @@
 #include "level_image.h"
 #include "relief/pipeline/process_store.h"
 #include "relief/process/operators.h"
+#include "relief/tiles/verify.h"
 
 namespace relief::testing {
 namespace {
@@ -139,6 +140,9 @@ TEST(ProcessStore, BadInputIsRefusedAndLeavesNothingBehind) {
   EXPECT_NE(r.error().message.find("already exists"), std::string::npos);
   // Elevation may take the filters that are not SAR-specific.
   EXPECT_TRUE(pipeline::process_store({dem, dir / "median", "median", {"radius=2"}}, ex, progress));
+  // With the geometric errors of the filtered heights: verify recomputes them.
+  const tiles::VerifyReport report = tiles::verify_store(dir / "median", ex, progress);
+  EXPECT_TRUE(report.ok()) << (report.ok() ? "" : report.problems.front());
 }
 
 }  // namespace

@@ -43,6 +43,16 @@ TEST(Manifest, BadManifestsNameTheFile) {
   }
 }
 
+TEST(Manifest, FormatOneNamesTheUpgrade) {
+  Manifest m;
+  m.format_version = 1;
+  auto back = Manifest::from_json(m.to_json(), "/data/pyr/manifest.json");
+  ASSERT_FALSE(back);
+  EXPECT_EQ(back.error().message,
+            "/data/pyr/manifest.json: the store predates geometric errors (store format version "
+            "1); upgrade it with `relief upgrade /data/pyr`");
+}
+
 // JSON has no infinity: written, it would read back as null and the store
 // would open nowhere. The writer refuses, naming the field, and writes nothing.
 TEST(Manifest, NonFiniteValuesAreNeverWritten) {

@@ -21,6 +21,7 @@
 #include "pyramid.h"
 #include "relief/base/file_io.h"
 #include "relief/base/first_error.h"
+#include "relief/tiles/geometric_error.h"
 #include "relief/tiles/store.h"
 #include "relief/tiles/store_layout.h"
 #include "source.h"
@@ -336,8 +337,15 @@ class Builder {
       return fail(fmt::format("{}: the inputs hold no valid samples (nodata everywhere)",
                               o_.inputs.front()));
     }
-    for (const auto& index : indices) RELIEF_CHECK(tiles::write_level_index(o_.output, index));
     report.manifest = make_manifest(global);
+    if (o_.kind == tiles::DatasetKind::Elevation) {
+      // From the tile files just written: the errors of what readers decode.
+      const tiles::TileShape shape = RELIEF_TRY(tiles::tile_shape_of(report.manifest));
+      RELIEF_CHECK(
+          tiles::compute_geometric_errors(indices, shape, tile_reader(shape), ex_, progress_));
+      lap("errors");
+    }
+    for (const auto& index : indices) RELIEF_CHECK(tiles::write_level_index(o_.output, index));
     // Tiles are renamed into place without fsync (atomic against a crash of the
     // process); one syncfs makes them all durable before the manifest declares
     // the store complete, so a power cut cannot leave a manifest over lost tiles.
@@ -487,18 +495,8 @@ class Builder {
     return result;
   }
 
-  // Writes one bordered tile unless a valid one is already there.
-  Result<WrittenTile> write_tile(const TileKey& key) {
-    const fs::path path = o_.output / tiles::tile_relative_path(key);
-    std::error_code ec;
-    if (fs::exists(path, ec)) {
-      auto bytes = read_file(path);
-      if (bytes) {
-        if (auto h = tiles::parse_tile_header(*bytes, path.string())) {
-          return WrittenTile{tiles::index_entry_for(key, *h, bytes->size()), h->stats, true};
-        }
-      }
-    }
+  // A tile as written, before encoding: its core with borders from its neighbours'.
+  Result<tiles::Raster> bordered_tile(const TileKey& key) {
     std::array<std::shared_ptr<const tiles::Raster>, 9> held;
     std::array<const tiles::Raster*, 9> around{};
     for (int dy = -1; dy <= 1; ++dy) {
@@ -511,8 +509,33 @@ class Builder {
         around[slot] = core.get();
       }
     }
-    const tiles::Raster bordered =
-        assemble_bordered(around, grid_.width(), grid_.height(), grid_.border(), type_);
+    return assemble_bordered(around, grid_.width(), grid_.height(), grid_.border(), type_);
+  }
+
+  // The written tiles for the geometric errors. A lossless codec gives back
+  // exactly what it encoded: the tiles are assembled again from the cores
+  // (mostly still cached) instead of read and decoded; a lossy one's errors
+  // are those of the decoded tiles, which readers see.
+  tiles::BorderedTileReader tile_reader(const tiles::TileShape& shape) {
+    if (codec_.codec != tiles::Codec::Zstd) return tiles::directory_tile_reader(o_.output, shape);
+    return [this](const TileKey& key) -> Result<std::shared_ptr<const tiles::Raster>> {
+      return std::make_shared<const tiles::Raster>(RELIEF_TRY(bordered_tile(key)));
+    };
+  }
+
+  // Writes one bordered tile unless a valid one is already there.
+  Result<WrittenTile> write_tile(const TileKey& key) {
+    const fs::path path = o_.output / tiles::tile_relative_path(key);
+    std::error_code ec;
+    if (fs::exists(path, ec)) {
+      auto bytes = read_file(path);
+      if (bytes) {
+        if (auto h = tiles::parse_tile_header(*bytes, path.string())) {
+          return WrittenTile{tiles::index_entry_for(key, *h, bytes->size()), h->stats, true};
+        }
+      }
+    }
+    const tiles::Raster bordered = RELIEF_TRY(bordered_tile(key));
     auto bytes = RELIEF_TRY(tiles::encode_tile(bordered, grid_.border(), codec_));
     RELIEF_CHECK(tiles::write_tile_file(o_.output, key, bytes));
     auto header = RELIEF_TRY(tiles::parse_tile_header(bytes, path.string()));

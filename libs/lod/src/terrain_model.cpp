@@ -127,6 +127,7 @@ void TerrainModel::begin_frame() {
   // all at once keeps a long flight's memory flat.
   if (quads_.size() > kMaxCachedQuads) quads_.clear();
   if (subtree_.size() > kMaxCachedQuads) subtree_.clear();
+  if (subtree_error_.size() > kMaxCachedQuads) subtree_error_.clear();
   provider_->begin_frame();
 }
 
@@ -233,16 +234,25 @@ bool TerrainModel::data_resident(const geo::TileKey& key) {
 }
 
 Result<double> TerrainModel::level_error(const geo::TileKey& key) {
+  if (key.level >= data_max_ || !store_) return 0.0;
+  return subtree_error(key);
+}
+
+// The geometric errors of the level index (docs/store-format.md), the
+// largest in the subtree: a tile whose data is narrower than a sample's
+// stencil everywhere (a small dataset seen from level 0) is stored with error
+// 0, its children with their real ones; taking the maximum keeps the bound
+// from dropping towards the root.
+double TerrainModel::subtree_error(const geo::TileKey& key) {
   if (key.level >= data_max_) return 0.0;
-  // The full mesh and the finest data both lie within the heights of the quad
-  // and of its neighbours (edge vertices may take a neighbour's samples).
-  HeightRange r = RELIEF_TRY(subtree_range(key));
-  for (int dy = -1; dy <= 1; ++dy) {
-    for (int dx = -1; dx <= 1; ++dx) {
-      if (auto n = key.neighbour(dx, dy)) r = unite(r, RELIEF_TRY(subtree_range(*n)));
-    }
+  if (auto it = subtree_error_.find(key); it != subtree_error_.end()) return it->second;
+  double e = 0;
+  if (const tiles::IndexEntry* entry = store_->index(key.level).find(key)) {
+    e = entry->error;
+    for (int c = 0; c < 4; ++c) e = std::max(e, subtree_error(key.child(c & 1, c >> 1)));
   }
-  return r.hi - r.lo;
+  subtree_error_[key] = e;
+  return e;
 }
 
 Result<double> TerrainModel::mesh_error(const geo::TileKey& key) {

@@ -237,7 +237,7 @@ Result<FuseReport> fuse_stores(const FuseOptions& o, Executor& executor, Progres
     RELIEF_CHECK(error.status());
   }
   const FuseReport report{output.tiles_written(), manifest.max_level - manifest.min_level + 1};
-  RELIEF_CHECK(output.finish(std::move(manifest)));
+  RELIEF_CHECK(output.finish(std::move(manifest), executor, progress));
   return report;
 }
 

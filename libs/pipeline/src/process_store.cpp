@@ -99,7 +99,7 @@ Result<ProcessStoreReport> process_store(const ProcessStoreOptions& o, Executor&
   for (const auto& p : o.params) described += " " + p;
   out_manifest.created_by = fmt::format("relief process --op {} ({})", described, o.input.string());
   const uint64_t tiles_written = output.tiles_written();
-  RELIEF_CHECK(output.finish(std::move(out_manifest)));
+  RELIEF_CHECK(output.finish(std::move(out_manifest), executor, progress));
   return ProcessStoreReport{
       tiles_written, m.max_level - m.min_level + 1,
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()};

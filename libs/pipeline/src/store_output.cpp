@@ -8,6 +8,7 @@
 
 #include "relief/base/file_io.h"
 #include "relief/tiles/assemble.h"
+#include "relief/tiles/geometric_error.h"
 
 namespace relief::pipeline {
 
@@ -63,7 +64,7 @@ Status StoreOutput::write(const geo::TileKey& key, const tiles::Raster& bordered
   return {};
 }
 
-Status StoreOutput::finish(tiles::Manifest manifest) {
+Status StoreOutput::finish(tiles::Manifest manifest, Executor& executor, Progress& progress) {
   std::sort(finest_stats_.begin(), finest_stats_.end(), [](const auto& a, const auto& b) {
     return std::tie(a.first.y, a.first.x) < std::tie(b.first.y, b.first.x);
   });
@@ -71,6 +72,11 @@ Status StoreOutput::finish(tiles::Manifest manifest) {
   for (const auto& s : finest_stats_) parts.push_back(s.second);
   manifest.stats =
       tiles::combine_stats(parts, manifest.sample_type == tiles::SampleType::UInt8 ? 3 : 1);
+  if (manifest.kind == tiles::DatasetKind::Elevation) {
+    const tiles::TileShape shape = RELIEF_TRY(tiles::tile_shape_of(manifest));
+    RELIEF_CHECK(tiles::compute_geometric_errors(
+        indices_, shape, tiles::directory_tile_reader(temp_, shape), executor, progress));
+  }
   for (const auto& index : indices_) RELIEF_CHECK(tiles::write_level_index(temp_, index));
   RELIEF_CHECK(tiles::write_manifest(temp_, manifest));
   std::error_code ec;

@@ -6,6 +6,8 @@
 #include <mutex>
 #include <vector>
 
+#include "relief/base/parallel.h"
+#include "relief/base/progress.h"
 #include "relief/base/result.h"
 #include "relief/tiles/store.h"
 
@@ -23,9 +25,10 @@ class StoreOutput {
   // bounds when given (fusion combines them from its inputs). Thread-safe.
   Status write(const geo::TileKey& key, const tiles::Raster& bordered, int border,
                const tiles::CodecOptions& codec, const tiles::IndexEntry* bounds = nullptr);
-  // Writes the indices and `manifest` (its statistics combined from the finest
-  // level's tiles), then moves the store into place.
-  Status finish(tiles::Manifest manifest);
+  // Writes the indices (with the tiles' geometric errors for an elevation
+  // store) and `manifest` (its statistics combined from the finest level's
+  // tiles), then moves the store into place.
+  Status finish(tiles::Manifest manifest, Executor& executor, Progress& progress);
   uint64_t tiles_written() const { return written_; }
 
  private:

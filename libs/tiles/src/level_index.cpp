@@ -8,15 +8,16 @@
 
 #include <fmt/format.h>
 
+#include "relief/tiles/manifest.h"
 #include "relief/tiles/tile_file.h"
 
 namespace relief::tiles {
 namespace {
 
 constexpr char kMagic[8] = {'R', 'E', 'L', 'I', 'E', 'F', 'I', '\0'};
-constexpr uint16_t kVersion = 1;
+constexpr uint16_t kVersion = kLevelIndexVersion;
 constexpr size_t kFixedHeader = 8 + 2 + 2 + 4 * 4 + 8;
-constexpr size_t kRecordSize = 16;
+constexpr size_t kRecordSize = kLevelIndexRecordSize;
 
 bool by_row(const IndexEntry& a, const IndexEntry& b) {
   return std::tie(a.key.y, a.key.x) < std::tie(b.key.y, b.key.x);
@@ -61,6 +62,12 @@ void LevelIndex::add(const IndexEntry& e) {
   assert(e.key.level == level_);
   entries_.push_back(e);
   sorted_ = false;
+}
+
+void LevelIndex::set_error(const geo::TileKey& key, float error) {
+  const IndexEntry* e = find(key);
+  assert(e);
+  entries_[static_cast<size_t>(e - entries_.data())].error = error;
 }
 
 void LevelIndex::sort() const {
@@ -124,6 +131,7 @@ std::vector<std::byte> LevelIndex::serialize() const {
     w.put<float>(std::nextafter(e.max, std::numeric_limits<float>::infinity()));
     w.put<uint32_t>(e.valid_count);
     w.put<uint32_t>(e.file_bytes);
+    w.put<float>(e.error);
   }
   w.put<uint32_t>(crc32_of(w.written()));
   assert(w.written().size() == out.size());
@@ -131,15 +139,29 @@ std::vector<std::byte> LevelIndex::serialize() const {
 }
 
 Result<LevelIndex> LevelIndex::parse(std::span<const std::byte> b, const std::string& name) {
+  return parse_any(b, name, false);
+}
+
+Result<LevelIndex> LevelIndex::parse_for_upgrade(std::span<const std::byte> b,
+                                                 const std::string& name) {
+  return parse_any(b, name, true);
+}
+
+Result<LevelIndex> LevelIndex::parse_any(std::span<const std::byte> b, const std::string& name,
+                                         bool accept_version1) {
   if (b.size() < kFixedHeader + 4 || std::memcmp(b.data(), kMagic, 8) != 0) {
     return fail(fmt::format("{}: not a relief level index", name));
   }
   if (read_at<uint32_t>(b, b.size() - 4) != crc32_of(b.first(b.size() - 4))) {
     return fail(fmt::format("{}: level index checksum mismatch", name));
   }
-  if (read_at<uint16_t>(b, 8) != kVersion) {
-    return fail(fmt::format("{}: unsupported level index version", name));
+  const auto version = read_at<uint16_t>(b, 8);
+  if (version == 1 && !accept_version1) return fail(predates_geometric_errors(name));
+  if (version != kVersion && version != 1) {
+    return fail(fmt::format("{}: unsupported level index version {}", name, version));
   }
+  // Version 1 records have no error (it reads as 0).
+  const size_t record_size = version == 1 ? 16 : kRecordSize;
   const int level = read_at<uint16_t>(b, 10);
   const auto x0 = read_at<uint32_t>(b, 12), y0 = read_at<uint32_t>(b, 16);
   const auto cols = read_at<uint32_t>(b, 20), rows = read_at<uint32_t>(b, 24);
@@ -150,14 +172,14 @@ Result<LevelIndex> LevelIndex::parse(std::span<const std::byte> b, const std::st
   // bitmap loop below would read far past the end.
   const uint64_t room = b.size() - kFixedHeader - 4;
   if (level > geo::kMaxLevel || bitmap_bytes > room ||
-      count > (room - bitmap_bytes) / kRecordSize || bitmap_bytes + count * kRecordSize != room) {
+      count > (room - bitmap_bytes) / record_size || bitmap_bytes + count * record_size != room) {
     return fail(fmt::format("{}: level index is truncated or inconsistent", name));
   }
   LevelIndex index(level);
   size_t record = kFixedHeader + bitmap_bytes;
   for (uint64_t bit = 0; bit < static_cast<uint64_t>(cols) * rows; ++bit) {
     if (!(static_cast<unsigned>(b[kFixedHeader + bit / 8]) & (1u << (bit % 8)))) continue;
-    if (record + kRecordSize > b.size() - 4) {
+    if (record + record_size > b.size() - 4) {
       return fail(fmt::format("{}: level index bitmap and records disagree", name));
     }
     IndexEntry e;
@@ -168,8 +190,13 @@ Result<LevelIndex> LevelIndex::parse(std::span<const std::byte> b, const std::st
     e.max = read_at<float>(b, record + 4);
     e.valid_count = read_at<uint32_t>(b, record + 8);
     e.file_bytes = read_at<uint32_t>(b, record + 12);
+    if (version != 1) e.error = read_at<float>(b, record + 16);
+    if (!(e.error >= 0)) {
+      return fail(
+          fmt::format("{}: tile {} has a geometric error of {}", name, e.key.to_string(), e.error));
+    }
     index.entries_.push_back(e);
-    record += kRecordSize;
+    record += record_size;
   }
   if (index.entries_.size() != count) {
     return fail(fmt::format("{}: level index bitmap and records disagree", name));

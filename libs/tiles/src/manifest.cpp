@@ -1,12 +1,15 @@
 #include "relief/tiles/manifest.h"
 
 #include <cstdint>
+#include <filesystem>
 #include <limits>
 #include <stdexcept>
 #include <utility>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
+
+#include "relief/tiles/store_layout.h"
 
 namespace relief::tiles {
 
@@ -30,6 +33,28 @@ T integer_at(const json& j, const char* key) {
 }
 
 }  // namespace
+
+std::string predates_geometric_errors(const std::string& file) {
+  // The store is the manifest's directory, or an index's level directory's parent.
+  std::filesystem::path store = std::filesystem::path(file).parent_path();
+  if (!file.ends_with(kManifestName)) store = store.parent_path();
+  return fmt::format(
+      "{}: the store predates geometric errors (store format version 1); upgrade it with "
+      "`relief upgrade {}`",
+      file, store.empty() ? std::string("STORE") : store.string());
+}
+
+std::optional<int> manifest_format_version(const std::string& text) {
+  const json j = json::parse(text, nullptr, false);
+  if (!j.is_object()) return std::nullopt;
+  const auto format = j.find("format");
+  if (format == j.end() || !format->is_string() || *format != "relief-store") return std::nullopt;
+  const auto it = j.find("format_version");
+  if (it == j.end() || !it->is_number_integer() || !std::in_range<int>(it->get<int64_t>())) {
+    return std::nullopt;
+  }
+  return it->get<int>();
+}
 
 std::string_view to_string(DatasetKind k) {
   switch (k) {
@@ -101,6 +126,7 @@ Result<Manifest> Manifest::from_json(const std::string& text, const std::string&
     }
     Manifest m;
     m.format_version = integer_at<int>(j, "format_version");
+    if (m.format_version == 1) return fail(predates_geometric_errors(name));
     if (m.format_version != kStoreFormatVersion) {
       return fail(fmt::format("{}: unsupported store format version {}", name, m.format_version));
     }

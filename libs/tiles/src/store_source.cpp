@@ -82,11 +82,11 @@ uint64_t max_file_bytes(const std::string& relative, const std::optional<TileSha
   }
   // Any other file is not one of a store's: the manifest's cap bounds it.
   if (!relative.ends_with(kLevelIndexName)) return kMaxManifestBytes;
-  // "L/index.rli": header, presence bitmap and a 16-byte record per tile.
+  // "L/index.rli": header, presence bitmap and a record per tile.
   const int level = std::atoi(relative.c_str());
   if (level < 0 || level > 13) return kMaxLevelIndexBytes;
   const uint64_t tiles = uint64_t{1} << (2 * level);
-  return std::min(kMaxLevelIndexBytes, 64 + tiles / 8 + 16 * tiles);
+  return std::min(kMaxLevelIndexBytes, 64 + tiles / 8 + kLevelIndexRecordSize * tiles);
 }
 
 uint64_t FileCaps::cap(const std::string& relative) const {
@@ -108,7 +108,10 @@ void FileCaps::learn(const std::string& relative, std::span<const std::byte> byt
 Status StoreSource::verify(const std::string& relative, std::span<const std::byte> bytes) {
   if (relative == kManifestName) {
     const std::string text(reinterpret_cast<const char*>(bytes.data()), bytes.size());
-    RELIEF_CHECK(Manifest::from_json(text, relative));
+    auto manifest = Manifest::from_json(text, relative);
+    // A store of format 1 is whole: Store::open refuses it with the way out,
+    // rather than a source retrying it as if it were corrupt.
+    if (!manifest && manifest_format_version(text) != 1) return std::unexpected(manifest.error());
     return {};
   }
   if (relative.ends_with(kTileExtension)) {
@@ -119,7 +122,7 @@ Status StoreSource::verify(const std::string& relative, std::span<const std::byt
     }
     return {};
   }
-  RELIEF_CHECK(LevelIndex::parse(bytes, relative));
+  RELIEF_CHECK(LevelIndex::parse_for_upgrade(bytes, relative));  // whole, of either version
   return {};
 }
 

@@ -7,11 +7,42 @@
 #include <fmt/format.h>
 
 #include "relief/base/file_io.h"
+#include "relief/tiles/geometric_error.h"
 #include "relief/tiles/store.h"
 #include "relief/tiles/store_layout.h"
 
 namespace relief::tiles {
 namespace fs = std::filesystem;
+
+namespace {
+
+// The errors recomputed from the tiles must be those in the indexes, bit for bit.
+void check_geometric_errors(const Store& store, Executor& executor, Progress& progress,
+                            VerifyReport& report) {
+  const Manifest& m = store.manifest();
+  std::vector<LevelIndex> indices;
+  for (int level = m.min_level; level <= m.max_level; ++level)
+    indices.push_back(store.index(level));
+  auto st = compute_geometric_errors(indices, store.tile_shape(), store_tile_reader(store),
+                                     executor, progress);
+  if (!st) {
+    report.problems.push_back(st.error().message);
+    return;
+  }
+  for (const LevelIndex& index : indices) {
+    for (const IndexEntry& e : index.entries()) {
+      const IndexEntry* stored = store.index(e.key.level).find(e.key);
+      if (stored && stored->error != e.error) {
+        report.problems.push_back(
+            fmt::format("{}: tile {} has a geometric error of {} in the level index, {} recomputed",
+                        (store.root() / level_index_relative_path(e.key.level)).string(),
+                        e.key.to_string(), stored->error, e.error));
+      }
+    }
+  }
+}
+
+}  // namespace
 
 VerifyReport verify_store(const fs::path& root, Executor& executor, Progress& progress) {
   VerifyReport report;
@@ -88,6 +119,10 @@ VerifyReport verify_store(const fs::path& root, Executor& executor, Progress& pr
     progress.advance();
   });
   progress.end();
+  // Only over tiles that read back: a broken tile is reported above already.
+  if (report.ok() && store->manifest().kind == DatasetKind::Elevation) {
+    check_geometric_errors(*store, executor, progress, report);
+  }
   std::sort(report.problems.begin(), report.problems.end());
   return report;
 }

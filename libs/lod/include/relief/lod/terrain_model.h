@@ -101,7 +101,8 @@ class TerrainModel {
 
   // Upper bound, metres, of the vertical distance between the full mesh of
   // quad `key`'s level data (every sample a vertex) and the finest data below
-  // it: 0 at and beyond the store's finest level. Needs no tiles.
+  // it, from the level index's geometric errors (the largest in the subtree):
+  // 0 at and beyond the store's finest level. Needs no tiles.
   Result<double> level_error(const geo::TileKey& key);
 
   // Bilinear height at interior sample coordinates (x, y) of a bordered tile,
@@ -129,6 +130,7 @@ class TerrainModel {
   // the chord error of flat triangles on the curved ellipsoid.
   Result<double> mesh_error(const geo::TileKey& key);
   Result<HeightRange> subtree_range(const geo::TileKey& key);
+  double subtree_error(const geo::TileKey& key);
   Result<double> exact_mesh_error(const geo::TileKey& key);
   // Has the provider measure the exact errors of every quad of a finest tile
   // on its own threads when it decodes the tile.
@@ -143,6 +145,7 @@ class TerrainModel {
   TileProvider* provider_;
   std::unordered_map<geo::TileKey, TilePtr, geo::TileKeyHash> pinned_;  // this frame's
   std::unordered_map<geo::TileKey, HeightRange, geo::TileKeyHash> subtree_;
+  std::unordered_map<geo::TileKey, double, geo::TileKeyHash> subtree_error_;
   std::unordered_map<geo::TileKey, QuadInfo, geo::TileKeyHash> quads_;
   std::shared_ptr<PreparedErrors> prepared_;  // null: blocking provider
   ErrorCounts error_counts_;

@@ -6,8 +6,10 @@
 // Binary layout (little-endian): magic "RELIEFI\0", u16 version, u16 level,
 // u32 x0, y0, columns, rows (bounding box of present tiles), u64 count, the
 // presence bitmap of columns*rows bits (row-major, LSB first), then `count`
-// records {f32 min, f32 max, u32 valid samples, u32 file bytes} in bitmap
-// order, then u32 CRC-32 of everything before it. min/max are rounded outwards.
+// records {f32 min, f32 max, u32 valid samples, u32 file bytes, f32 geometric
+// error} in bitmap order, then u32 CRC-32 of everything before it. min/max are
+// rounded outwards, the error upwards. Version 1 (no error) is refused with the
+// advice to run `relief upgrade`.
 #include <cstdint>
 #include <span>
 #include <string>
@@ -29,12 +31,16 @@ struct IndexEntry {
   float error = 0;
 };
 
+inline constexpr uint16_t kLevelIndexVersion = 2;
+inline constexpr size_t kLevelIndexRecordSize = 20;
+
 class LevelIndex {
  public:
   explicit LevelIndex(int level = 0) : level_(level) {}
   int level() const { return level_; }
 
-  void add(const IndexEntry& e);  // keys must be unique
+  void add(const IndexEntry& e);                         // keys must be unique
+  void set_error(const geo::TileKey& key, float error);  // the key must be present
   const IndexEntry* find(const geo::TileKey& key) const;
   // Entries sorted by (y, x).
   const std::vector<IndexEntry>& entries() const;
@@ -43,8 +49,13 @@ class LevelIndex {
 
   std::vector<std::byte> serialize() const;
   static Result<LevelIndex> parse(std::span<const std::byte> bytes, const std::string& name);
+  // Also reads version 1 (errors 0): for `relief upgrade` only.
+  static Result<LevelIndex> parse_for_upgrade(std::span<const std::byte> bytes,
+                                              const std::string& name);
 
  private:
+  static Result<LevelIndex> parse_any(std::span<const std::byte> bytes, const std::string& name,
+                                      bool accept_version1);
   void sort() const;
   int level_;
   mutable std::vector<IndexEntry> entries_;

@@ -1,5 +1,6 @@
 #pragma once
 // manifest.json: the global description of one dataset (see docs/store-format.md).
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -10,7 +11,14 @@
 
 namespace relief::tiles {
 
-inline constexpr int kStoreFormatVersion = 1;
+// 2: level indexes carry each tile's geometric error (level index version 2).
+inline constexpr int kStoreFormatVersion = 2;
+
+// The one-line error for a file of a store written before geometric errors
+// (format 1): names the file and says how to upgrade the store.
+std::string predates_geometric_errors(const std::string& file);
+// The format version a relief store manifest declares; nullopt for anything else.
+std::optional<int> manifest_format_version(const std::string& text);
 
 enum class DatasetKind { Elevation, Imagery, Sar };
 std::string_view to_string(DatasetKind k);
