@@ -126,6 +126,17 @@ Result<std::pair<std::vector<lod::Keyframe>, double>> read_path(const std::strin
   return std::pair{std::move(keys), fps};
 }
 
+json refine_json(const view::FrameReport& r) {
+  const lod::RefineStats& s = *r.refine;
+  return {{"ms", s.seconds * 1e3},
+          {"marks_evaluated", s.marks_evaluated},
+          {"tiles_measured", s.tiles_measured},
+          {"tiles_cached", r.refine_cache_tiles},
+          {"cache_bytes", r.refine_cache_bytes},
+          {"too_coarse_quads", s.too_coarse},
+          {"unresolved_diamonds", s.unresolved}};
+}
+
 json loader_json(const stream::LoaderStats& s) {
   json levels = json::object();
   for (size_t l = 0; l < s.resident_per_level.size(); ++l) {
@@ -244,6 +255,11 @@ int render_path(const Args& args, RenderSetup& setup, const Clock& clock) {
         {"exact_errors",
          {{"measured", terrain.error_counts().measured},
           {"prepared", terrain.error_counts().prepared}}}};
+    if (r.report.refine) f["refine"] = refine_json(r.report);
+    if (!options->stats.empty()) {  // measured, not the bound: a lower bound of the true maximum
+      const lod::MeasuredError e = RELIEF_TRY((*scene)->measure_last_frame(camera, 500));
+      f["measured_error"] = {{"max_pixels", e.max_pixels}, {"samples", e.samples}};
+    }
     if (loader) f["memory"] = loader_json(loader->stats());
     if (setup.disk_cache) {
       const net::DiskCacheStats d = setup.disk_cache->stats();

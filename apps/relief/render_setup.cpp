@@ -56,6 +56,15 @@ Result<RenderSetup> parse_render_setup(const Args& args) {
     }
   }
   if (auto level = RELIEF_TRY(args.get_int("--mesh-level", 0, 8))) s.mesh_level = *level;
+  if (auto lod = args.get("--lod")) {
+    if (*lod == "quads") {
+      s.lod_mode = lod::LodMode::quads;
+    } else if (*lod == "edge-marks" || *lod == "edge-marks-bottom-up") {
+      if (*lod == "edge-marks-bottom-up") s.refine_variant = lod::RefineVariant::kBottomUp;
+    } else {
+      return fail("--lod: '" + *lod + "' is none of edge-marks, edge-marks-bottom-up, quads");
+    }
+  }
   s.full_resolution = args.has("--full-resolution");
   s.sky = render::RenderOptions{}.sky;
   if (auto text = args.get("--sky")) {
@@ -91,6 +100,8 @@ view::SceneOptions scene_options(const RenderSetup& setup) {
   if (setup.imagery) so.selection.texture = &*setup.imagery;
   so.full_resolution = setup.full_resolution;
   so.mesh_level = setup.mesh_level;
+  so.selection.mode = setup.lod_mode;
+  so.refine_variant = setup.refine_variant;
   so.gpu_budget = setup.gpu_budget;
   so.render.exaggeration = static_cast<float>(setup.exaggeration);
   so.render.sky = setup.sky;

@@ -19,6 +19,8 @@ struct RenderSetup {
   int width = 1024, height = 768;
   double fov = 60, pixel_error = 1, exaggeration = 1;
   int mesh_level = 4;
+  lod::LodMode lod_mode = lod::LodMode::edge_marks;
+  lod::RefineVariant refine_variant = lod::RefineVariant::kTopDown;
   bool full_resolution = false;
   std::array<float, 3> sky{};
   uint64_t gpu_budget = uint64_t{1} << 30;

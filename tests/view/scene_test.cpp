@@ -30,9 +30,10 @@ class SceneTest : public ::testing::Test {
     target_ = std::move(*target);
   }
 
-  std::unique_ptr<Scene> scene(bool interactive) {
+  std::unique_ptr<Scene> scene(bool interactive, lod::LodMode mode = lod::LodMode::edge_marks) {
     SceneOptions o;
     o.interactive = interactive;
+    o.selection.mode = mode;
     o.mesh_level = 3;
     auto s = Scene::create(testing::pyrenees_store(), nullptr, o, clock_);
     EXPECT_TRUE(s) << s.error().message;
@@ -52,29 +53,39 @@ class SceneTest : public ::testing::Test {
 };
 
 TEST_F(SceneTest, InteractiveFramesNeverWaitAndConvergeToTheCompleteFrame) {
-  auto complete = scene(false);
-  ASSERT_TRUE(complete);
-  auto still = complete->draw(kOblique, *target_);
-  ASSERT_TRUE(still) << still.error().message;
-  EXPECT_TRUE(still->complete);
-  const std::vector<uint8_t> expected = *target_->read_rgba();
+  for (const lod::LodMode mode : {lod::LodMode::edge_marks, lod::LodMode::quads}) {
+    SCOPED_TRACE(mode == lod::LodMode::quads ? "quads" : "edge marks");
+    auto complete = scene(false, mode);
+    ASSERT_TRUE(complete);
+    auto still = complete->draw(kOblique, *target_);
+    ASSERT_TRUE(still) << still.error().message;
+    EXPECT_TRUE(still->complete);
+    const std::vector<uint8_t> expected = *target_->read_rgba();
 
-  auto live = scene(true);
-  ASSERT_TRUE(live);
-  auto first = live->draw(kOblique, *target_);
-  ASSERT_TRUE(first) << first.error().message;
-  EXPECT_FALSE(first->complete);  // only level 0 was resident: the rest was requested
-  EXPECT_GT(first->selection.waiting, 0u);
-  std::optional<FrameReport> last;
-  for (int frame = 0; frame < 64 && !(last && last->complete); ++frame) {
-    wait_idle(*live);
-    auto f = live->draw(kOblique, *target_);
-    ASSERT_TRUE(f) << f.error().message;
-    last = *f;
+    auto live = scene(true, mode);
+    ASSERT_TRUE(live);
+    auto first = live->draw(kOblique, *target_);
+    ASSERT_TRUE(first) << first.error().message;
+    EXPECT_FALSE(first->complete);  // only level 0 was resident: the rest was requested
+    EXPECT_GT(first->selection.waiting, 0u);
+    std::optional<FrameReport> last;
+    for (int frame = 0; frame < 64 && !(last && last->complete); ++frame) {
+      wait_idle(*live);
+      auto f = live->draw(kOblique, *target_);
+      ASSERT_TRUE(f) << f.error().message;
+      last = *f;
+    }
+    ASSERT_TRUE(last && last->complete);
+    EXPECT_EQ(*target_->read_rgba(), expected);
+    EXPECT_EQ(last->selection.quads, still->selection.quads);
+    EXPECT_EQ(last->draw.triangles, still->draw.triangles);
+    EXPECT_EQ(last->refine.has_value(), mode == lod::LodMode::edge_marks);
+    // Measured on the drawn mesh, within the threshold (1 px).
+    auto measured = live->measure_last_frame(kOblique, 4000);
+    ASSERT_TRUE(measured) << measured.error().message;
+    EXPECT_GT(measured->samples, 200u);
+    EXPECT_LE(measured->max_pixels, 1.0);
   }
-  ASSERT_TRUE(last && last->complete);
-  EXPECT_EQ(*target_->read_rgba(), expected);
-  EXPECT_EQ(last->selection.quads, still->selection.quads);
 }
 
 TEST_F(SceneTest, APathPlaysOneFramePerPeriodOfTheClockAndReportsItsCut) {

@@ -2,16 +2,22 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <random>
 
+#include <fmt/format.h>
+
 #include "relief/lod/mesh_evaluator.h"
+#include "relief/lod/refined_evaluator.h"
 
 namespace relief::lod {
 
 Result<MeasuredError> measure_screen_error(const View& view, TerrainModel& terrain,
                                            const Selection& selection, const geo::GeoBox& extent,
-                                           int samples) {
+                                           int samples, const RefinedMesh* refined) {
   MeshEvaluator mesh(terrain, selection);
+  std::optional<RefinedEvaluator> refined_mesh;
+  if (refined) refined_mesh.emplace(terrain, selection, *refined);
   std::mt19937 rng(5);
   const int finest = terrain.data_max_level();
   const double n = std::ldexp(1.0, finest);
@@ -40,7 +46,16 @@ Result<MeasuredError> measure_screen_error(const View& view, TerrainModel& terra
     const double height =
         tile->f32()[static_cast<size_t>(j + b) * static_cast<size_t>(tile->width()) +
                     static_cast<size_t>(i + b)];
-    const Vec3 on_mesh = RELIEF_TRY(mesh.mesh_point(*at, slon, slat));
+    Vec3 on_mesh;
+    if (refined_mesh) {
+      const std::optional<Vec3> p = RELIEF_TRY(refined_mesh->point(*at, slon, slat));
+      if (!p)
+        return fail(fmt::format("refined mesh: no triangle of quad {} holds {},{}",
+                                at->key.to_string(), slon, slat));
+      on_mesh = *p;
+    } else {
+      on_mesh = RELIEF_TRY(mesh.mesh_point(*at, slon, slat));
+    }
     double ax, ay, bx, by;
     if (!view.project(ecef(slon, slat, height), ax, ay) || !view.project(on_mesh, bx, by)) continue;
     if (ax < 0 || ay < 0 || ax >= view.width || ay >= view.height) continue;

@@ -41,12 +41,23 @@ struct Scene::Impl {
   std::unique_ptr<stream::TileLoader> loader, imagery_loader;
   std::unique_ptr<lod::TerrainModel> terrain;
   std::unique_ptr<render::TerrainRenderer> renderer;
-  std::optional<lod::Camera> previous;  // of the last frame, unless cut
+  std::unique_ptr<lod::RefineCache> refine_cache;  // edge-mark frames
+  std::optional<lod::Camera> previous;             // of the last frame, unless cut
   lod::Selection last;
+  std::optional<lod::RefinedMesh> last_refined;
   uint64_t imagery_misses = 0;  // a frame that missed imagery is not complete
 
   Impl(const tiles::Store& s, const tiles::Store* i, const SceneOptions& o, const Clock& c)
-      : store(s), imagery(i), options(o), clock(c), mesh(mesh_level(s, o)) {}
+      : store(s), imagery(i), options(o), clock(c), mesh(mesh_level(s, o)) {
+    if (edge_marks()) {
+      options.selection.neighbour_indices = true;  // refinement walks across quads
+      refine_cache = std::make_unique<lod::RefineCache>(options.loader.memory_budget);
+    }
+  }
+
+  bool edge_marks() const {
+    return options.selection.mode == lod::LodMode::edge_marks && !options.full_resolution;
+  }
 
   // The brute-force reference has one vertex per finest sample.
   static int mesh_level(const tiles::Store& s, const SceneOptions& o) {
@@ -108,8 +119,20 @@ Result<FrameReport> Scene::draw(const lod::Camera& camera, render::RenderTarget&
     if (!requested) return std::unexpected(requested.error());
   }
   m.terrain->end_frame();
+  std::optional<lod::RefinedMesh> refined;
+  if (m.edge_marks()) {
+    lod::RefineOptions ro;
+    ro.pixel_error = m.options.selection.pixel_error;
+    ro.variant = m.options.refine_variant;
+    ro.cache = m.refine_cache.get();
+    refined = RELIEF_TRY(lod::refine(view, *m.terrain, selection, ro));
+    report.refine = refined->stats;
+    report.refine_cache_tiles = m.refine_cache->tiles();
+    report.refine_cache_bytes = m.refine_cache->bytes();
+  }
   if (m.imagery_loader) m.imagery_loader->begin_frame();  // the renderer requests imagery
-  auto frame = m.renderer->draw(view, selection, target, m.options.render);
+  auto frame =
+      m.renderer->draw(view, selection, target, m.options.render, refined ? &*refined : nullptr);
   if (m.imagery_loader) m.imagery_loader->end_frame();
   report.draw = RELIEF_TRY(std::move(frame));
   report.frame_seconds = seconds_between(start, m.clock.now());
@@ -123,6 +146,7 @@ Result<FrameReport> Scene::draw(const lod::Camera& camera, render::RenderTarget&
     m.imagery_misses = is.misses;
   }
   m.last = std::move(selection);
+  m.last_refined = std::move(refined);
   m.previous = camera;
   return report;
 }
@@ -140,6 +164,16 @@ lod::TerrainModel& Scene::terrain() {
 const lod::Selection& Scene::last_selection() const {
   return impl_->last;
 }
+const lod::RefinedMesh* Scene::last_refined() const {
+  return impl_->last_refined ? &*impl_->last_refined : nullptr;
+}
+
+Result<lod::MeasuredError> Scene::measure_last_frame(const lod::Camera& camera, int samples) {
+  const lod::View view = RELIEF_TRY(lod::make_view(camera));
+  return lod::measure_screen_error(view, *impl_->terrain, impl_->last,
+                                   impl_->store.manifest().extent, samples, last_refined());
+}
+
 stream::TileLoader* Scene::elevation_loader() {
   return impl_->loader.get();
 }

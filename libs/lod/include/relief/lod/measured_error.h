@@ -9,6 +9,7 @@
 
 #include "relief/base/result.h"
 #include "relief/geo/tile_key.h"
+#include "relief/lod/refined_mesh.h"
 #include "relief/lod/selection.h"
 
 namespace relief::lod {
@@ -19,9 +20,10 @@ struct MeasuredError {
 };
 
 // Over `samples` random draws (a fixed seed: the same frame gives the same
-// figure) inside the data's `extent`.
+// figure) inside the data's `extent`; of the refined mesh when given
+// (edge-mark frames), else of the selection's MeshTopology meshes.
 Result<MeasuredError> measure_screen_error(const View& view, TerrainModel& terrain,
                                            const Selection& selection, const geo::GeoBox& extent,
-                                           int samples);
+                                           int samples, const RefinedMesh* refined = nullptr);
 
 }  // namespace relief::lod

@@ -12,9 +12,12 @@
 // loaders' threads are internal.
 #include <functional>
 #include <memory>
+#include <optional>
 
 #include "relief/base/clock.h"
 #include "relief/base/result.h"
+#include "relief/lod/measured_error.h"
+#include "relief/lod/refine.h"
 #include "relief/lod/selection.h"
 #include "relief/render/terrain_renderer.h"
 #include "relief/stream/tile_loader.h"
@@ -30,7 +33,12 @@ struct SceneOptions {
   uint64_t imagery_budget = uint64_t{512} << 20;  // the imagery loader's memory budget
   uint64_t gpu_budget = uint64_t{1} << 30;
   int mesh_level = 4;
+  // selection.mode == LodMode::edge_marks: each frame's quads are refined by
+  // edge marks (lod/refine.h) with this variant, the per-diamond errors of
+  // data tiles cached within the loader's memory budget (loader.memory_budget
+  // again: they take ~8 times the bytes of the decoded tile).
   lod::SelectionOptions selection;
+  lod::RefineVariant refine_variant = lod::RefineVariant::kTopDown;
   render::RenderOptions render;
   // Prefetch: while the camera moves, also request what a selection this
   // many frames ahead on the same motion would want (at lower priority).
@@ -46,6 +54,9 @@ struct SceneOptions {
 struct FrameReport {
   lod::Camera camera;
   lod::SelectionStats selection;
+  std::optional<lod::RefineStats> refine;  // edge-mark frames
+  size_t refine_cache_tiles = 0;           // data tiles with cached diamond errors
+  uint64_t refine_cache_bytes = 0;
   render::FrameStats draw;
   double frame_seconds = 0;  // selection to the end of drawing, on the clock
   double cpu_seconds = 0;    // the same without the wait for the GPU
@@ -74,6 +85,10 @@ class Scene {
   const SceneOptions& options() const;
   lod::TerrainModel& terrain();
   const lod::Selection& last_selection() const;  // of the last draw()
+  const lod::RefinedMesh* last_refined() const;  // of the last draw(), edge-mark frames
+  // The last frame's measured screen error (lod/measured_error.h) over
+  // `samples` random finest samples.
+  Result<lod::MeasuredError> measure_last_frame(const lod::Camera& camera, int samples);
   // Null for complete frames (no loaders) or without imagery.
   stream::TileLoader* elevation_loader();
   stream::TileLoader* imagery_loader();
