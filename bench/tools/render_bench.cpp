@@ -13,10 +13,12 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "relief/lod/measured_error.h"
+#include "relief/lod/refine.h"
 #include "relief/lod/selection.h"
 #include "relief/render/terrain_renderer.h"
 
@@ -49,33 +51,61 @@ constexpr int kErrorSamples = 20000;
 // draw of the Himalaya block's 100-230 M triangles takes 20-40 s.
 constexpr uint64_t kMaxDrawnTriangles = 50'000'000;
 
-Result<Measure> measure(const tiles::Store& store, const lod::View& view, int mesh_level,
-                        bool full) {
-  const lod::MeshTopology mesh(mesh_level);
-  lod::TerrainModel terrain(&store, mesh, uint64_t{2} << 30);
+enum class Mesh { quads, edge_marks, brute_force };
+
+// Selection (and, for edge marks, refinement) of one frame.
+struct Frame {
+  lod::Selection selection;
+  std::optional<lod::RefinedMesh> refined;
+  double seconds = 0;
+};
+
+Result<Frame> select_frame(const lod::View& view, lod::TerrainModel& terrain, Mesh mesh,
+                           lod::RefineCache& cache) {
   lod::SelectionOptions o;
   o.pixel_error = 1;
-  o.full_resolution = full;
+  o.full_resolution = mesh == Mesh::brute_force;
+  o.mode = mesh == Mesh::edge_marks ? lod::LodMode::edge_marks : lod::LodMode::quads;
+  o.neighbour_indices = mesh == Mesh::edge_marks;
+  Frame f;
+  f.selection = RELIEF_TRY(lod::select_quads(view, terrain, o));
+  f.seconds = f.selection.stats.seconds;
+  if (mesh == Mesh::edge_marks) {
+    lod::RefineOptions ro;
+    ro.pixel_error = 1;
+    ro.cache = &cache;
+    f.refined = RELIEF_TRY(lod::refine(view, terrain, f.selection, ro));
+    f.seconds += f.refined->stats.seconds;
+  }
+  return f;
+}
+
+Result<Measure> measure(const tiles::Store& store, const lod::View& view, Mesh mesh) {
+  const int full_level = static_cast<int>(std::log2(store.grid().height()));
+  const lod::MeshTopology topology(mesh == Mesh::brute_force ? full_level : 4);
+  lod::TerrainModel terrain(&store, topology, uint64_t{2} << 30);
+  lod::RefineCache cache(uint64_t{2} << 30);
   Measure m;
-  auto first = RELIEF_TRY(lod::select_quads(view, terrain, o));
-  m.cold_ms = first.stats.seconds * 1e3;
+  Frame first = RELIEF_TRY(select_frame(view, terrain, mesh, cache));
+  m.cold_ms = first.seconds * 1e3;
   std::vector<double> warm;
   for (int r = 0; r < kWarmSelections; ++r) {
-    auto s = RELIEF_TRY(lod::select_quads(view, terrain, o));
-    warm.push_back(s.stats.seconds * 1e3);
+    warm.push_back(RELIEF_TRY(select_frame(view, terrain, mesh, cache)).seconds * 1e3);
   }
   m.warm_ms = median(warm);
-  m.quads = first.stats.quads;
-  m.error_bound = first.stats.max_error_pixels;
-  if (!full) {
-    const lod::MeasuredError e = RELIEF_TRY(
-        lod::measure_screen_error(view, terrain, first, store.manifest().extent, kErrorSamples));
+  m.quads = first.selection.stats.quads;
+  m.error_bound = first.selection.stats.max_error_pixels;
+  const lod::RefinedMesh* refined = first.refined ? &*first.refined : nullptr;
+  if (refined) m.error_bound = 1;  // refinement splits every diamond over the threshold
+  if (mesh != Mesh::brute_force) {
+    const lod::MeasuredError e = RELIEF_TRY(lod::measure_screen_error(
+        view, terrain, first.selection, store.manifest().extent, kErrorSamples, refined));
     m.measured_error = e.max_pixels;
     m.error_samples = e.samples;
   }
-  if (full && first.stats.triangles > kMaxDrawnTriangles) {
-    m.triangles = first.stats.triangles;
-    m.draw_calls = first.stats.quads;
+  if (mesh == Mesh::brute_force && first.selection.stats.triangles > kMaxDrawnTriangles) {
+    m.triangles = first.selection.stats.triangles;
+    m.draw_calls = 1;
     m.gpu_ms = NAN;
     return m;
   }
@@ -83,8 +113,10 @@ Result<Measure> measure(const tiles::Store& store, const lod::View& view, int me
   auto renderer = RELIEF_TRY(render::TerrainRenderer::create(terrain, nullptr));
   std::vector<double> gpu;
   for (int r = 0; r <= kGpuRuns; ++r) {
-    auto f = RELIEF_TRY(renderer->draw(view, first, *target, {}));
-    if (r > 0) gpu.push_back(f.gpu_seconds * 1e3);  // the first (warm-up) uploads textures
+    auto f = RELIEF_TRY(renderer->draw(view, first.selection, *target, {}, refined));
+    // Preparation (records, uploads) and the GPU's work to glFinish; the
+    // first (warm-up) draw uploads the textures.
+    if (r > 0) gpu.push_back((f.prepare_seconds + f.gpu_seconds) * 1e3);
     m.triangles = f.triangles;
     m.draw_calls = f.draw_calls;
   }
@@ -120,7 +152,8 @@ int main(int argc, char** argv) {
     return 1;
   }
   std::printf(
-      "renderer: %s; 1280x720, pixel error 1, LOD mesh level 4, brute force: every finest sample\n",
+      "renderer: %s; 1280x720, pixel error 1; edge marks (refined quads), quads (mesh level 4), "
+      "brute force (every finest sample)\n",
       (*context)->renderer().c_str());
   struct ViewCase {
     const char* name;
@@ -149,40 +182,48 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "%s: %s\n", v.name, view.error().message.c_str());
       return 1;
     }
-    auto lod_m = measure(*store, *view, 4, false);
-    auto full_m = measure(*store, *view, 8, true);
-    if (!lod_m || !full_m) {
-      std::fprintf(stderr, "%s\n", (!lod_m ? lod_m.error() : full_m.error()).message.c_str());
+    auto edge_m = measure(*store, *view, Mesh::edge_marks);
+    auto lod_m = measure(*store, *view, Mesh::quads);
+    auto full_m = measure(*store, *view, Mesh::brute_force);
+    if (!edge_m || !lod_m || !full_m) {
+      const Error& e = !edge_m ? edge_m.error() : !lod_m ? lod_m.error() : full_m.error();
+      std::fprintf(stderr, "%s: %s\n", v.name, e.message.c_str());
       return 1;
     }
     const double pixels = double(view->width) * view->height;
-    for (const auto& [label, m] : {std::pair{"LOD", *lod_m}, std::pair{"full", *full_m}}) {
+    for (const auto& [label, m] :
+         {std::pair{"edges", *edge_m}, std::pair{"quads", *lod_m}, std::pair{"full", *full_m}}) {
       std::printf("%-27s %-6s %8u %11llu %7.2f %6u %10.2f %10.1f %9.1f %8.2f %11.2f\n", v.name,
                   label, m.quads, static_cast<unsigned long long>(m.triangles),
                   double(m.triangles) / pixels, m.draw_calls, m.warm_ms, m.cold_ms, m.gpu_ms,
                   m.error_bound, m.measured_error);
     }
     if (markdown) {
-      std::fprintf(markdown,
-                   "| %s | LOD | %u | %llu | %.2f | %u | %.2f ms | %.1f ms | %.1f ms | %.2f px | "
-                   "%.2f px (%zu samples) |\n",
-                   v.name, lod_m->quads, static_cast<unsigned long long>(lod_m->triangles),
-                   double(lod_m->triangles) / pixels, lod_m->draw_calls, lod_m->warm_ms,
-                   lod_m->cold_ms, lod_m->gpu_ms, lod_m->error_bound, lod_m->measured_error,
-                   lod_m->error_samples);
+      for (const auto& [label, m] :
+           {std::pair{"edge marks", *edge_m}, std::pair{"quads", *lod_m}}) {
+        std::fprintf(markdown,
+                     "| %s | %s | %u | %llu | %.2f | %u | %.2f ms | %.1f ms | %.1f ms | %.2f px | "
+                     "%.2f px (%zu samples) |\n",
+                     label == std::string("edge marks") ? v.name : "", label, m.quads,
+                     static_cast<unsigned long long>(m.triangles), double(m.triangles) / pixels,
+                     m.draw_calls, m.warm_ms, m.cold_ms, m.gpu_ms, m.error_bound, m.measured_error,
+                     m.error_samples);
+      }
       const std::string gpu =
           std::isnan(full_m->gpu_ms) ? std::string("not drawn") : fmt_ms(full_m->gpu_ms);
       std::fprintf(markdown, "| | brute force | %u | %llu | %.2f | %u | | | %s | | |\n",
                    full_m->quads, static_cast<unsigned long long>(full_m->triangles),
                    double(full_m->triangles) / pixels, full_m->draw_calls, gpu.c_str());
     }
-    std::printf("%-27s ratio: %.1fx fewer triangles", v.name,
-                static_cast<double>(full_m->triangles) /
-                    static_cast<double>(std::max<uint64_t>(1, lod_m->triangles)));
-    if (!std::isnan(full_m->gpu_ms)) {
-      std::printf(", %.1fx less GPU time", full_m->gpu_ms / std::max(1e-9, lod_m->gpu_ms));
+    for (const auto& [label, m] : {std::pair{"edge marks", *edge_m}, std::pair{"quads", *lod_m}}) {
+      std::printf("%-27s %s against brute force: %.1fx fewer triangles", v.name, label,
+                  static_cast<double>(full_m->triangles) /
+                      static_cast<double>(std::max<uint64_t>(1, m.triangles)));
+      if (!std::isnan(full_m->gpu_ms)) {
+        std::printf(", %.1fx less frame time", full_m->gpu_ms / std::max(1e-9, m.gpu_ms));
+      }
+      std::printf("\n");
     }
-    std::printf("\n");
   }
   if (markdown && std::fclose(markdown) != 0) {
     std::fprintf(stderr, "%s: write failed\n", argv[3]);
