@@ -4,17 +4,73 @@
 #include <cmath>
 #include <optional>
 #include <random>
+#include <unordered_map>
 
 #include <fmt/format.h>
 
 #include "relief/lod/mesh_evaluator.h"
 #include "relief/lod/refined_evaluator.h"
+#include "relief/tiles/full_mesh.h"
 
 namespace relief::lod {
 
+namespace {
+
+// Which finest samples the guarantee covers (docs/store-format.md): not
+// nodata, and, above the store's finest level, not where the drawn level's
+// full mesh reaches a nodata sample (the fall-off at the data's edge or a
+// void, which the level's geometric error leaves out). Tiles with every sample
+// valid answer from the index; the others are decoded with their nodata when
+// `decode` allows reading them, else their samples are left out.
+class Coverage {
+ public:
+  Coverage(const tiles::Store& store, bool decode) : store_(store), decode_(decode) {}
+
+  Result<bool> covered(const geo::TileKey& finest, int i, int j, const SelectedQuad& drawn,
+                       double lon, double lat) {
+    const int w = store_.grid().width(), h = store_.grid().height(), b = store_.grid().border();
+    if (!full(finest)) {
+      if (!decode_) return false;
+      const tiles::Raster& t = *RELIEF_TRY(raw(finest));
+      if (std::isnan(t.f32()[static_cast<size_t>(j + b) * t.width() + i + b])) return false;
+    }
+    const int level = std::min(drawn.key.level, store_.manifest().max_level);
+    if (level >= store_.manifest().max_level) return true;
+    const geo::TileKey k{level, drawn.key.x >> (drawn.key.level - level),
+                         drawn.key.y >> (drawn.key.level - level)};
+    const geo::GeoBox kb = k.bounds();
+    const double x = (lon - kb.west) / kb.width() * w, y = (kb.north - lat) / kb.height() * h;
+    if (full(k) && x >= 1.5 && y >= 1.5 && x <= w - 1.5 && y <= h - 1.5) return true;
+    if (!decode_) return false;
+    return tiles::full_mesh_stencil_valid(*RELIEF_TRY(raw(k)), b, x, y);
+  }
+
+ private:
+  bool full(const geo::TileKey& k) const {
+    const tiles::IndexEntry* e = store_.index(k.level).find(k);
+    return e && e->valid_count == static_cast<uint32_t>(store_.grid().width()) *
+                                      static_cast<uint32_t>(store_.grid().height());
+  }
+  Result<const tiles::Raster*> raw(const geo::TileKey& k) {
+    auto it = raw_.find(k);
+    if (it == raw_.end()) {
+      tiles::Tile t = RELIEF_TRY(store_.read_tile(k));
+      it = raw_.emplace(k, std::move(t.raster)).first;
+    }
+    return &it->second;
+  }
+
+  const tiles::Store& store_;
+  const bool decode_;
+  std::unordered_map<geo::TileKey, tiles::Raster, geo::TileKeyHash> raw_;
+};
+
+}  // namespace
+
 Result<MeasuredError> measure_screen_error(const View& view, TerrainModel& terrain,
                                            const Selection& selection, const geo::GeoBox& extent,
-                                           int samples, const RefinedMesh* refined) {
+                                           int samples, const RefinedMesh* refined,
+                                           bool read_tiles) {
   MeshEvaluator mesh(terrain, selection);
   std::optional<RefinedEvaluator> refined_mesh;
   if (refined) refined_mesh.emplace(terrain, selection, *refined);
@@ -24,6 +80,8 @@ Result<MeasuredError> measure_screen_error(const View& view, TerrainModel& terra
   const int w = terrain.tile_width(), h = terrain.tile_height(), b = terrain.border();
   std::uniform_real_distribution<double> unit(0, 1);
   MeasuredError out;
+  if (!terrain.store()) return out;
+  Coverage coverage(*terrain.store(), read_tiles);
   for (int s = 0; s < samples && !selection.quads.empty(); ++s) {
     const SelectedQuad& q = selection.quads[rng() % selection.quads.size()];
     const geo::GeoBox all = q.key.bounds();
@@ -43,6 +101,7 @@ Result<MeasuredError> measure_screen_error(const View& view, TerrainModel& terra
     if (!terrain.available(k)) continue;  // interactive frames: not resident, not drawn
     auto tile = RELIEF_TRY(terrain.tile(k));
     if (!tile) continue;  // no data: drawn at height 0 by both
+    if (!RELIEF_TRY(coverage.covered(k, i, j, *at, slon, slat))) continue;
     const double height =
         tile->f32()[static_cast<size_t>(j + b) * static_cast<size_t>(tile->width()) +
                     static_cast<size_t>(i + b)];

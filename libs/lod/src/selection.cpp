@@ -245,7 +245,9 @@ class Selector {
     return {};
   }
 
-  Status visit(const TileKey& key) {
+  // Splits `key` while its error asks for it; the leaves it ends with are
+  // also appended to `added` when given.
+  Status visit(const TileKey& key, std::deque<TileKey>* added = nullptr) {
     if (leaves_.size() > o_.max_quads) {
       return fail(
           fmt::format("level of detail: more than {} quads; raise --pixel-error", o_.max_quads));
@@ -256,9 +258,10 @@ class Selector {
     if (split) split = RELIEF_TRY(children_available(key));
     if (!split) {
       leaves_.set(key, leaf);
+      if (added) added->push_back(key);
       return {};
     }
-    for (int c = 0; c < 4; ++c) RELIEF_CHECK(visit(key.child(c & 1, c >> 1)));
+    for (int c = 0; c < 4; ++c) RELIEF_CHECK(visit(key.child(c & 1, c >> 1), added));
     return {};
   }
 
@@ -277,13 +280,12 @@ class Selector {
     }
   }
 
+  // A split for the restriction: the children may need splitting for their
+  // own error too (a child's bound is not below its parent's: its sides may
+  // take the parent's data), so they are visited like any quad.
   Status split(const TileKey& key, std::deque<TileKey>& work) {
     leaves_.erase(key);
-    for (int c = 0; c < 4; ++c) {
-      const TileKey child = key.child(c & 1, c >> 1);
-      leaves_.set(child, RELIEF_TRY(assess(child)));
-      work.push_back(child);
-    }
+    for (int c = 0; c < 4; ++c) RELIEF_CHECK(visit(key.child(c & 1, c >> 1), &work));
     return {};
   }
 

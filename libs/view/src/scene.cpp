@@ -170,8 +170,10 @@ const lod::RefinedMesh* Scene::last_refined() const {
 
 Result<lod::MeasuredError> Scene::measure_last_frame(const lod::Camera& camera, int samples) {
   const lod::View view = RELIEF_TRY(lod::make_view(camera));
+  // Interactive frames never wait for I/O: no tile is read to measure them.
   return lod::measure_screen_error(view, *impl_->terrain, impl_->last,
-                                   impl_->store.manifest().extent, samples, last_refined());
+                                   impl_->store.manifest().extent, samples, last_refined(),
+                                   !impl_->options.interactive);
 }
 
 stream::TileLoader* Scene::elevation_loader() {

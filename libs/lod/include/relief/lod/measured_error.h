@@ -4,7 +4,10 @@
 // shader builds it (lod::MeshEvaluator), the largest distance between the two
 // in pixels, over random finest samples of the selected quads that land on
 // screen. A lower bound of the true maximum, to set against the selection's
-// upper bound: what `relief render --stats` and bench/render report.
+// upper bound: what `relief render --stats` and bench/render report. Only the
+// samples the guarantee covers count (docs/store-format.md): not nodata, and
+// above the store's finest level not where the drawn level's full mesh
+// reaches nodata (the fall-off at the data's edge and at voids).
 #include <cstddef>
 
 #include "relief/base/result.h"
@@ -21,9 +24,13 @@ struct MeasuredError {
 
 // Over `samples` random draws (a fixed seed: the same frame gives the same
 // figure) inside the data's `extent`; of the refined mesh when given
-// (edge-mark frames), else of the selection's MeshTopology meshes.
+// (edge-mark frames), else of the selection's MeshTopology meshes. Deciding
+// which samples are covered reads the tiles that have nodata from the store
+// when `read_tiles` allows (stills, benchmarks); interactive frames must not
+// wait for I/O: their samples in such tiles are left out.
 Result<MeasuredError> measure_screen_error(const View& view, TerrainModel& terrain,
                                            const Selection& selection, const geo::GeoBox& extent,
-                                           int samples, const RefinedMesh* refined = nullptr);
+                                           int samples, const RefinedMesh* refined = nullptr,
+                                           bool read_tiles = true);
 
 }  // namespace relief::lod
