@@ -14,6 +14,7 @@
 #include "relief/base/memory_use.h"
 #include "relief/base/units.h"
 #include "relief/lod/camera_path.h"
+#include "relief/view/path_file.h"
 #include "relief/view/path_player.h"
 
 namespace relief::cli {
@@ -79,53 +80,6 @@ Result<PathOptions> parse_path_options(const Args& args) {
   return o;
 }
 
-// {"fps": N, "keyframes": [{"time": T, "camera": [6 numbers], "cut": bool}, ...]}
-Result<std::pair<std::vector<lod::Keyframe>, double>> read_path(const std::string& path,
-                                                                const RenderSetup& s) {
-  auto bytes = RELIEF_TRY(read_file(path));
-  json doc =
-      json::parse(reinterpret_cast<const char*>(bytes.data()),
-                  reinterpret_cast<const char*>(bytes.data()) + bytes.size(), nullptr, false);
-  if (doc.is_discarded() || !doc.is_object()) return fail(path + ": not a JSON object");
-  double fps = 30;
-  if (doc.contains("fps")) {
-    if (!doc["fps"].is_number() || !(doc["fps"].get<double>() > 0)) {
-      return fail(path + ": \"fps\" must be a number > 0");
-    }
-    fps = doc["fps"].get<double>();
-  }
-  if (!doc.contains("keyframes") || !doc["keyframes"].is_array() || doc["keyframes"].empty()) {
-    return fail(path + ": needs a non-empty \"keyframes\" array");
-  }
-  std::vector<lod::Keyframe> keys;
-  for (size_t i = 0; i < doc["keyframes"].size(); ++i) {
-    const json& k = doc["keyframes"][i];
-    const std::string where = fmt::format("{}: keyframe {}", path, i);
-    if (!k.is_object() || !k.contains("time") || !k["time"].is_number() || !k.contains("camera") ||
-        !k["camera"].is_array() || k["camera"].size() != 6) {
-      return fail(where +
-                  ": needs \"time\" and \"camera\": [lon, lat, height, heading, pitch, roll]");
-    }
-    std::vector<double> c(6);
-    for (size_t j = 0; j < 6; ++j) {
-      if (!k["camera"][j].is_number()) return fail(where + ": camera values must be numbers");
-      c[j] = k["camera"][j].get<double>();
-    }
-    lod::Keyframe key;
-    key.time = k["time"].get<double>();
-    if (!std::isfinite(key.time)) return fail(where + ": \"time\" must be finite");
-    key.camera = RELIEF_TRY(camera_from_values(where, c, s));
-    key.cut = k.value("cut", false);
-    if (!keys.empty() && !(key.time > keys.back().time)) {
-      return fail(where + ": times must increase");
-    }
-    if (auto view = lod::make_view(key.camera); !view)
-      return fail(where + ": " + view.error().message);
-    keys.push_back(key);
-  }
-  return std::pair{std::move(keys), fps};
-}
-
 json refine_json(const view::FrameReport& r) {
   const lod::RefineStats& s = *r.refine;
   return {{"ms", s.seconds * 1e3},
@@ -170,9 +124,13 @@ int render_path(const Args& args, RenderSetup& setup, const Clock& clock) {
   auto options = parse_path_options(args);
   if (!options) return report_error(options.error().message);
   if (setup.full_resolution) return report_error("--full-resolution: for stills only, not --path");
-  auto path = read_path(*args.get("--path"), setup);
+  auto path = view::read_path_file(
+      *args.get("--path"), [&](const std::string& where, const std::vector<double>& values) {
+        return camera_from_values(where, values, setup);
+      });
   if (!path) return report_error(path.error().message);
-  const auto& [keys, path_fps] = *path;
+  const std::vector<lod::Keyframe>& keys = path->keyframes;
+  const double path_fps = path->fps;
   const double fps = options->fps > 0 ? options->fps : path_fps;
   const double duration = keys.back().time - keys.front().time;
   // In double: a huge duration must not overflow the frame count.

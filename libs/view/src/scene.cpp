@@ -1,6 +1,7 @@
 #include "relief/view/scene.h"
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <optional>
 
@@ -157,6 +158,13 @@ void Scene::cut() {
 
 const SceneOptions& Scene::options() const {
   return impl_->options;
+}
+void Scene::set_pixel_error(double pixels) {
+  assert(pixels > 0);
+  impl_->options.selection.pixel_error = pixels;
+}
+void Scene::set_render_options(const render::RenderOptions& options) {
+  impl_->options.render = options;
 }
 lod::TerrainModel& Scene::terrain() {
   return *impl_->terrain;

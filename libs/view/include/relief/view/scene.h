@@ -83,6 +83,9 @@ class Scene {
   void cut();
 
   const SceneOptions& options() const;
+  // Changes that act from the next frame (the viewer's panels, speed-dependent LOD).
+  void set_pixel_error(double pixels);
+  void set_render_options(const render::RenderOptions& options);
   lod::TerrainModel& terrain();
   const lod::Selection& last_selection() const;  // of the last draw()
   const lod::RefinedMesh* last_refined() const;  // of the last draw(), edge-mark frames

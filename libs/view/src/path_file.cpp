@@ -1,0 +1,87 @@
+#include "relief/view/path_file.h"
+
+#include <cmath>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "relief/base/file_io.h"
+
+namespace relief::view {
+
+using nlohmann::json;
+
+Result<PathFile> parse_path(const std::string& text, const std::string& where_file,
+                            const CameraParser& camera) {
+  const std::string& path = where_file;
+  json doc = json::parse(text, nullptr, false);
+  if (doc.is_discarded() || !doc.is_object()) return fail(path + ": not a JSON object");
+  PathFile file;
+  if (doc.contains("fps")) {
+    if (!doc["fps"].is_number() || !(doc["fps"].get<double>() > 0)) {
+      return fail(path + ": \"fps\" must be a number > 0");
+    }
+    file.fps = doc["fps"].get<double>();
+  }
+  if (!doc.contains("keyframes") || !doc["keyframes"].is_array() || doc["keyframes"].empty()) {
+    return fail(path + ": needs a non-empty \"keyframes\" array");
+  }
+  std::vector<lod::Keyframe>& keys = file.keyframes;
+  for (size_t i = 0; i < doc["keyframes"].size(); ++i) {
+    const json& k = doc["keyframes"][i];
+    const std::string where = fmt::format("{}: keyframe {}", path, i);
+    if (!k.is_object() || !k.contains("time") || !k["time"].is_number() || !k.contains("camera") ||
+        !k["camera"].is_array() || k["camera"].size() != 6) {
+      return fail(where +
+                  ": needs \"time\" and \"camera\": [lon, lat, height, heading, pitch, roll]");
+    }
+    std::vector<double> c(6);
+    for (size_t j = 0; j < 6; ++j) {
+      if (!k["camera"][j].is_number()) return fail(where + ": camera values must be numbers");
+      c[j] = k["camera"][j].get<double>();
+    }
+    lod::Keyframe key;
+    key.time = k["time"].get<double>();
+    if (!std::isfinite(key.time)) return fail(where + ": \"time\" must be finite");
+    key.camera = RELIEF_TRY(camera(where, c));
+    if (k.contains("cut") && !k["cut"].is_boolean())
+      return fail(where + ": \"cut\" must be true or false");
+    key.cut = k.value("cut", false);
+    if (!keys.empty() && !(key.time > keys.back().time)) {
+      return fail(where + ": times must increase");
+    }
+    if (auto view = lod::make_view(key.camera); !view)
+      return fail(where + ": " + view.error().message);
+    keys.push_back(key);
+  }
+  return file;
+}
+
+Result<PathFile> read_path_file(const std::string& path, const CameraParser& camera) {
+  auto bytes = RELIEF_TRY(read_file(path));
+  return parse_path(std::string(reinterpret_cast<const char*>(bytes.data()), bytes.size()), path,
+                    camera);
+}
+
+std::string path_to_json(const PathFile& file) {
+  // nlohmann writes doubles in the shortest form that reads back exactly.
+  json keys = json::array();
+  for (const lod::Keyframe& k : file.keyframes) {
+    const lod::Camera& c = k.camera;
+    json key = {{"time", k.time}, {"camera", {c.lon, c.lat, c.height, c.heading, c.pitch, c.roll}}};
+    if (k.cut) key["cut"] = true;
+    keys.push_back(std::move(key));
+  }
+  std::string text = "{\"fps\": " + json(file.fps).dump() + ", \"keyframes\": [\n";
+  for (size_t i = 0; i < keys.size(); ++i) {
+    text += " " + keys[i].dump() + (i + 1 < keys.size() ? ",\n" : "\n");
+  }
+  return text + "]}\n";
+}
+
+Status write_path_file(const std::string& path, const PathFile& file) {
+  const std::string text = path_to_json(file);
+  return write_file_atomic(path, std::as_bytes(std::span(text.data(), text.size())));
+}
+
+}  // namespace relief::view
