@@ -9,6 +9,10 @@ packages=(
   libzstd-dev liblerc-dev libpng-dev libturbojpeg0-dev libwebp-dev
   nlohmann-json3-dev libfmt-dev libgtest-dev
   otb-bin
+  libglfw3-dev libimgui-dev xvfb xauth                                   # relief view (libs/window)
+  libavcodec-dev libavformat-dev libswscale-dev libavutil-dev ffmpeg     # movies (libs/video); ffprobe in tests
+  libopenmpi-dev openmpi-bin                                             # cluster rendering (libs/parallel)
+  ferret-datasets                                                        # ETOPO5, the whole-Earth DEM of the main job
   clang-19 libclang-rt-19-dev  # fuzz/: libFuzzer (clang >= 16 compiles <expected>)
 )
 missing=()
