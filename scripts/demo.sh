@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The main job on bundled data: builds relief, turns the SRTM tiles of the
 # eastern Pyrenees and Catalonia into a tile pyramid, verifies it, describes
-# it, renders a still of it and flies over it (frames in out/pyrenees-flight/); then builds the Umbra SAR image into a store, reduces its speckle and
+# it, renders a still of it and flies over it (frames in out/pyrenees-flight/);
+# builds a whole-Earth DEM and imagery pair and renders the planet; then builds the Umbra SAR image into a store, reduces its speckle and
 # dynamic range on every level, and detects point targets.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -20,6 +21,16 @@ OUT=${1:-out/pyrenees}
 # link: frames never wait for data; coarse tiles show until detail arrives.
 "$RELIEF" render "$OUT" --path data/paths/pyrenees-flyover.json -o "$OUT-flight" --size 640x360 \
   --simulate-latency 20 --simulate-bandwidth 50 --until-complete 10 --stats "$OUT-flight.json"
+
+# A planet: ETOPO5 (the whole-Earth DEM of Debian's ferret-datasets, 0..360
+# longitudes and no CRS, read as it comes) under NASA's Blue Marble.
+PLANET=$(dirname "$OUT")
+"$RELIEF" build 'NETCDF:"/usr/share/ferret-vis/data/etopo5.cdf":ROSE' -o "$PLANET/etopo5" \
+  --kind elevation --overwrite
+"$RELIEF" build data/imagery/earth-blue-marble-4096.jpg -o "$PLANET/blue-marble" --kind imagery \
+  --overwrite
+"$RELIEF" render "$PLANET/etopo5" --imagery "$PLANET/blue-marble" --camera 5,30,9000000,0,-90,0 \
+  --size 1280x960 -o "$PLANET/earth.png"
 
 SAR=$(dirname "$OUT")/umbra
 rm -rf "$SAR" "$SAR-lee" "$SAR-grey"
