@@ -20,6 +20,10 @@ options:
   --weights LIST       one weight > 0 per input, comma-separated (default: all 1)
   --mode NAME          blend: weighted mean of the valid inputs (default);
                        first: the first valid input in the order given (fills voids)
+  --allow-upsampling   fuse inputs of very different resolution anyway: the
+                       coarser ones are interpolated to the finest level over
+                       their whole extent (refused by default when that makes
+                       more than 4 times the inputs' tiles)
   --threads N          worker threads (default: one per core)
   -q, --quiet          no progress bar
 )";
@@ -28,10 +32,14 @@ options:
 
 int run_fuse(const std::vector<std::string>& argv) {
   if (wants_help(argv)) return print_help(kHelp);
-  auto args = Args::parse(
-      argv,
-      {{"--output", "-o"}, {"--weights"}, {"--mode"}, {"--threads"}, {"--quiet", "-q", false}},
-      "fuse");
+  auto args = Args::parse(argv,
+                          {{"--output", "-o"},
+                           {"--weights"},
+                           {"--mode"},
+                           {"--threads"},
+                           {"--allow-upsampling", "", false},
+                           {"--quiet", "-q", false}},
+                          "fuse");
   if (!args) return report_error(args.error().message);
   if (!args->get("--output")) return report_error("fuse: -o OUT is required");
   pipeline::FuseOptions o;
@@ -56,6 +64,7 @@ int run_fuse(const std::vector<std::string>& argv) {
       return report_error("--mode: '" + *mode + "' is not blend or first");
     }
   }
+  o.allow_upsampling = args->has("--allow-upsampling");
   auto threads = args->get_int("--threads", 1, 1024);
   if (!threads) return report_error(threads.error().message);
   ThreadExecutor executor(threads->value_or(0));

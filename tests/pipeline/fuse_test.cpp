@@ -2,6 +2,8 @@
 // void filling, index bounds combined without scanning, and bad input.
 #include <gtest/gtest.h>
 
+#include <fmt/format.h>
+
 #include <cmath>
 #include <cstring>
 
@@ -131,6 +133,37 @@ TEST(Fuse, BadInputIsRefused) {
   expect_error({{dem, dem}, {1, -2}, pipeline::FuseMode::Blend, dir / "d"}, "not > 0");
   expect_error({{dem, dir / "nope"}, {}, pipeline::FuseMode::Blend, dir / "e"}, "nope");
   EXPECT_TRUE(fs::is_empty(dir.path()));
+}
+
+// A global DEM fused with a local one would be upsampled to the local one's
+// finest level everywhere: refused before anything is written.
+TEST(Fuse, InputsOfVeryDifferentResolutionAreRefusedUnlessAllowed) {
+  ScratchDir dir("fuse_upsampling");
+  ThreadExecutor ex(2);
+  NullProgress progress;
+  ingest::BuildOptions o;
+  o.inputs = {data("srtm/N42E001.hgt.zip")};
+  o.kind = tiles::DatasetKind::Elevation;
+  o.max_level = single("N41E001").manifest().max_level - 1;
+  const fs::path near = built_store("N42E001-one-coarser", o).root();
+  o.max_level = *o.max_level - 3;
+  const fs::path coarse = built_store("N42E001-four-coarser", o).root();
+  const fs::path fine = single("N41E001").root();
+  pipeline::FuseOptions f{{near, coarse}, {}, pipeline::FuseMode::First, dir / "fused"};
+  auto r = pipeline::fuse_stores(f, ex, progress);
+  ASSERT_FALSE(r);
+  EXPECT_NE(
+      r.error().message.find(fmt::format("N42E001-four-coarser stops at level {}", *o.max_level)),
+      std::string::npos)
+      << r.error().message;
+  EXPECT_NE(r.error().message.find("--allow-upsampling"), std::string::npos);
+  EXPECT_TRUE(fs::is_empty(dir.path()));
+  // One level apart is the ordinary case: fused without being asked.
+  EXPECT_TRUE(pipeline::fuse_stores({{fine, near}, {}, pipeline::FuseMode::First, dir / "near"}, ex,
+                                    progress));
+  f.allow_upsampling = true;
+  f.output = dir / "allowed";
+  EXPECT_TRUE(pipeline::fuse_stores(f, ex, progress));
 }
 
 }  // namespace

@@ -127,6 +127,34 @@ tiles::Raster upsample(const tiles::Raster& ancestor, const geo::TileKey& a,
   return out;
 }
 
+// See FuseOptions::allow_upsampling. Counts are upper bounds (inputs may
+// overlap), in double: 4^20 descendants of a tile do not fit 32 bits.
+Status check_upsampling(const std::vector<tiles::Store>& stores,
+                        const std::vector<std::filesystem::path>& paths, int max_level) {
+  double own = 0, upsampled = 0;
+  size_t worst = 0;
+  double worst_tiles = 0;
+  for (size_t i = 0; i < stores.size(); ++i) {
+    const tiles::Manifest& m = stores[i].manifest();
+    for (int level = m.min_level; level <= m.max_level; ++level) {
+      own += static_cast<double>(stores[i].index(level).entries().size());
+    }
+    double tiles = 0;
+    const double finest = static_cast<double>(stores[i].index(m.max_level).entries().size());
+    for (int level = m.max_level + 1; level <= max_level; ++level) {
+      tiles += finest * std::ldexp(1.0, 2 * (level - m.max_level));
+    }
+    upsampled += tiles;
+    if (tiles > worst_tiles) worst_tiles = tiles, worst = i;
+  }
+  if (upsampled <= 4 * own) return {};
+  return fail(fmt::format(
+      "fuse: {} stops at level {} but the result goes to level {}: it would be upsampled into "
+      "~{:.0f} interpolated tiles (the inputs hold {:.0f}); fuse stores of similar resolution, or "
+      "pass --allow-upsampling",
+      paths[worst].string(), stores[worst].manifest().max_level, max_level, upsampled, own));
+}
+
 geo::TileKey ancestor_at(geo::TileKey key, int level) {
   while (key.level > level) key = *key.parent();
   return key;
@@ -171,6 +199,7 @@ Result<FuseReport> fuse_stores(const FuseOptions& o, Executor& executor, Progres
     for (const auto& src : s.manifest().sources) manifest.sources.push_back(src);
   }
   manifest.created_by = "relief fuse";
+  if (!o.allow_upsampling) RELIEF_CHECK(check_upsampling(stores, o.inputs, manifest.max_level));
   StoreOutput output =
       RELIEF_TRY(StoreOutput::create(o.output, manifest.min_level, manifest.max_level));
   const int border = manifest.border;

@@ -23,6 +23,12 @@ struct FuseOptions {
   std::vector<double> weights;                // one per input, > 0; empty: all 1
   FuseMode mode = FuseMode::Blend;
   std::filesystem::path output;  // must not exist yet
+  // An input that stops at a coarser level than another is upsampled to the
+  // finest level over its whole extent: a global DEM fused with a local one
+  // would become terabytes of interpolated tiles. Refused (before anything is
+  // written) when the upsampled tiles outnumber the inputs' own tiles more
+  // than 4 times, unless allowed.
+  bool allow_upsampling = false;
 };
 
 struct FuseReport {
