@@ -11,7 +11,7 @@ namespace relief::cli {
 
 namespace {
 constexpr const char* kHelp =
-    R"(usage: relief serve STORE [--port P] [--bind ADDR] [--threads N]
+    R"(usage: relief serve STORE [--port P] [--bind ADDR] [--threads N] [--share I/N]
                     [--max-connections N] [--read-timeout S] [--write-timeout S]
 
 Serves a store read-only over HTTP/1.1 until interrupted: only the store's own
@@ -26,6 +26,10 @@ options:
   --bind ADDR    IPv4 address to listen on (default 127.0.0.1)
   --threads N    event-loop threads, each serving any number of connections
                  (default 16)
+  --share I/N    serve share I of a store spread over N servers: the tiles
+                 whose Morton index modulo N is I (others get 404), the
+                 manifest and level indices always. Readers name all N
+                 servers in order: cyclic:http://a/,http://b/,...
   --max-connections N  connections open at once; more get 503 (default 1024,
                  lowered to fit the file-descriptor limit)
   --read-timeout S     a request head must arrive whole within S seconds of
@@ -43,7 +47,8 @@ int run_serve(const std::vector<std::string>& argv) {
                            {"--threads"},
                            {"--max-connections"},
                            {"--read-timeout"},
-                           {"--write-timeout"}},
+                           {"--write-timeout"},
+                           {"--share"}},
                           "serve");
   if (!args) return report_error(args.error().message);
   if (args->positional().size() != 1) return report_error("serve: expected exactly one STORE");
@@ -56,6 +61,16 @@ int run_serve(const std::vector<std::string>& argv) {
   auto threads = args->get_int("--threads", 1, 1024);
   if (!threads) return report_error(threads.error().message);
   o.threads = threads->value_or(16);
+  if (auto share = args->get("--share")) {
+    unsigned index = 0, count = 0;
+    char end = 0;
+    if (std::sscanf(share->c_str(), "%u/%u%c", &index, &count, &end) != 2 || count < 1 ||
+        index >= count || count > 4096) {
+      return report_error("--share: '" + *share + "' is not I/N with 0 <= I < N <= 4096");
+    }
+    o.share_index = index;
+    o.share_count = count;
+  }
   auto connections = args->get_int("--max-connections", 1, 1 << 20);
   if (!connections) return report_error(connections.error().message);
   o.max_connections = connections->value_or(o.max_connections);
@@ -79,7 +94,9 @@ int run_serve(const std::vector<std::string>& argv) {
   pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
   auto server = serve::StoreServer::start(o);
   if (!server) return report_error(server.error().message);
-  std::printf("serving %s on http://%s:%d/\n", o.root.c_str(), o.bind.c_str(), (*server)->port());
+  std::printf("serving %s on http://%s:%d/", o.root.c_str(), o.bind.c_str(), (*server)->port());
+  if (o.share_count > 1) std::printf(" (share %u/%u)", o.share_index, o.share_count);
+  std::printf("\n");
   std::fflush(stdout);
   int signal = 0;
   sigwait(&stop_signals, &signal);

@@ -9,6 +9,7 @@ int run_build(const std::vector<std::string>& args);
 int run_info(const std::vector<std::string>& args);
 int run_verify(const std::vector<std::string>& args);
 int run_upgrade(const std::vector<std::string>& args);
+int run_split(const std::vector<std::string>& args);
 int run_export(const std::vector<std::string>& args);
 int run_process(const std::vector<std::string>& args);
 int run_fuse(const std::vector<std::string>& args);

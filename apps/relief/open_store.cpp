@@ -6,7 +6,8 @@ namespace relief::cli {
 
 Result<tiles::Store> open_store(const std::string& location, const StoreAccess& access,
                                 std::shared_ptr<net::DiskCache>* disk_cache) {
-  const bool remote = location.starts_with("http://") || location.starts_with("https://");
+  const bool remote = location.starts_with("http://") || location.starts_with("https://") ||
+                      location.starts_with("cyclic:");
   const bool simulated = access.link.latency.count() > 0 || access.link.bits_per_second > 0;
   std::shared_ptr<const tiles::StoreSource> source;
   if (remote) {

@@ -174,11 +174,15 @@ Result<std::shared_ptr<HttpSource>> HttpSource::create(HttpOptions o) {
 }
 
 Result<std::shared_ptr<const tiles::StoreSource>> source_for(const std::string& location) {
-  if (!location.starts_with("http://") && !location.starts_with("https://")) {
-    return tiles::local_source(location);
-  }
+  constexpr std::string_view kCyclic = "cyclic:";
   HttpOptions o;
   size_t start = 0;
+  if (location.starts_with(kCyclic)) {
+    o.layout = ServerLayout::Distributed;
+    start = kCyclic.size();
+  } else if (!location.starts_with("http://") && !location.starts_with("https://")) {
+    return tiles::local_source(location);
+  }
   for (;;) {
     const size_t comma = location.find(',', start);
     o.base_urls.push_back(

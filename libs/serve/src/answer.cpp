@@ -67,14 +67,17 @@ Answer status_answer(int code, bool keep_alive, bool head_only, std::string_view
   return a;
 }
 
-Answer answer_request(const std::filesystem::path& root, const Request& r) {
+Answer answer_request(const std::filesystem::path& root, const Request& r, uint32_t share_index,
+                      uint32_t share_count) {
   const bool head_only = r.method == "HEAD";
   const bool keep_alive = r.keep_alive && !r.has_body;  // a body is never read: end there
   if (r.method != "GET" && !head_only) {
     return status_answer(405, keep_alive, false, "Allow: GET, HEAD\r\n");
   }
   const auto file = store_file_for(r.target);
-  if (!file) return status_answer(404, keep_alive, head_only);
+  if (!file || !in_share(*file, share_index, share_count)) {
+    return status_answer(404, keep_alive, head_only);
+  }
   struct stat st {};
   const int fd = open_regular_file(root / *file, st);
   if (fd < 0) return status_answer(404, keep_alive, head_only);

@@ -24,8 +24,11 @@ Answer status_answer(int code, bool keep_alive, bool head_only = false,
 
 // The answer to a parsed request against the store at `root`: 405 for
 // methods other than GET and HEAD, 404 for anything that is not a regular
-// store file, 304 on a matching If-None-Match, 206/416 for a single byte
+// store file (or not in the share), 304 on a matching If-None-Match, 206/416 for a single byte
 // range, 200 otherwise.
-Answer answer_request(const std::filesystem::path& root, const Request& request);
+// Only the files of share `share_index` of `share_count` are served (see
+// ServeOptions).
+Answer answer_request(const std::filesystem::path& root, const Request& request,
+                      uint32_t share_index = 0, uint32_t share_count = 1);
 
 }  // namespace relief::serve

@@ -235,9 +235,12 @@ bool Loop::serve_buffered(Connection& c, Clock::time_point now) {
     } else {
       const auto request = parse_request_head(std::string_view(c.in).substr(0, end + 4));
       c.in.erase(0, end + 4);
-      start_answer(
-          c, request ? answer_request(server_.options_.root, *request) : status_answer(400, false),
-          now);
+      start_answer(c,
+                   request
+                       ? answer_request(server_.options_.root, *request,
+                                        server_.options_.share_index, server_.options_.share_count)
+                       : status_answer(400, false),
+                   now);
     }
     if (write_some(c, now) == Progress::closed) return false;
   }
@@ -332,6 +335,11 @@ void Loop::sweep(Clock::time_point now) {
 
 }  // namespace
 
+bool in_share(const std::string& file, uint32_t index, uint32_t count) {
+  const auto key = tiles::tile_key_from_relative_path(file);
+  return !key || key->morton() % count == index;
+}
+
 std::optional<std::string> store_file_for(const std::string& path) {
   if (path.size() < 2 || path[0] != '/') return std::nullopt;
   const std::string rel = path.substr(1);
@@ -355,6 +363,10 @@ Result<std::unique_ptr<StoreServer>> StoreServer::start(const ServeOptions& o) {
   }
   if (o.port < 0 || o.port > 65535) return fail(fmt::format("--port: {} is not a port", o.port));
   if (o.max_connections < 1) return fail("serve: the connection limit must be at least 1");
+  if (o.share_count < 1 || o.share_index >= o.share_count) {
+    return fail(fmt::format("--share: {}/{} is not a share i/n with 0 <= i < n", o.share_index,
+                            o.share_count));
+  }
   sockaddr_in address{};
   address.sin_family = AF_INET;
   address.sin_port = htons(static_cast<uint16_t>(o.port));

@@ -40,7 +40,10 @@ class HttpSource : public tiles::StoreSource {
   virtual HttpStats stats() const = 0;
 };
 
-// "http://a/,http://b/" as mirrors; a local path when there is no scheme.
+// "http://a/,http://b/" as mirrors; "cyclic:http://a/,http://b/" as the
+// servers of a store spread cyclically (`relief serve --share i/n`, or
+// `relief split` directories behind any static server), in share order; a
+// local path otherwise.
 Result<std::shared_ptr<const tiles::StoreSource>> source_for(const std::string& location);
 
 }  // namespace relief::net

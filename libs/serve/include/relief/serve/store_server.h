@@ -32,6 +32,11 @@ struct ServeOptions {
   // An answer that makes no progress for this long (a client that does not
   // read) is dropped.
   std::chrono::milliseconds write_timeout{10'000};
+  // Serve one share of a store spread cyclically over `share_count` servers
+  // (seed 000 §3.1): tiles whose Morton index modulo share_count is
+  // share_index; the manifest and level indices always. Other tiles get 404.
+  // Readers take such servers with the `cyclic:` URL list (net::source_for).
+  uint32_t share_index = 0, share_count = 1;
   // The clock deadlines are measured with (tests move it forward); empty:
   // std::chrono::steady_clock::now.
   std::function<std::chrono::steady_clock::time_point()> clock;
@@ -50,5 +55,9 @@ class StoreServer {
 // The file a request path names inside a store, or nullopt when the path is
 // not one of the store's files (anything else, any traversal, any encoding).
 std::optional<std::string> store_file_for(const std::string& request_path);
+
+// Whether the store file `file` (a relative path) belongs to share `index` of
+// `count`: tiles by Morton index modulo count, every other file to each share.
+bool in_share(const std::string& file, uint32_t index, uint32_t count);
 
 }  // namespace relief::serve

@@ -1,0 +1,75 @@
+#include "relief/tiles/split.h"
+
+#include <fmt/format.h>
+
+#include "relief/base/file_io.h"
+#include "relief/tiles/store.h"
+#include "relief/tiles/store_layout.h"
+
+namespace relief::tiles {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// A hard link where the file system allows (store files are never modified
+// in place, only replaced, so sharing them is safe), else a copy.
+Result<bool> link_or_copy(const fs::path& from, const fs::path& to) {
+  std::error_code ec;
+  fs::create_directories(to.parent_path(), ec);
+  if (ec) return fail(fmt::format("{}: {}", to.parent_path().string(), ec.message()));
+  fs::create_hard_link(from, to, ec);
+  if (!ec) return true;
+  fs::copy_file(from, to, ec);
+  if (ec) return fail(fmt::format("{}: {}", to.string(), ec.message()));
+  return false;
+}
+
+}  // namespace
+
+fs::path share_directory(const fs::path& output, uint32_t index) {
+  return output / fmt::format("share-{}", index);
+}
+
+Result<SplitReport> split_store(const fs::path& root, const fs::path& output, uint32_t shares) {
+  if (shares < 2 || shares > 4096) {
+    return fail(fmt::format("--shares: {} is not in [2, 4096]", shares));
+  }
+  const Store store = RELIEF_TRY(Store::open(root));
+  std::error_code ec;
+  if (fs::exists(fs::symlink_status(output, ec))) {
+    return fail(fmt::format("{}: already exists", output.string()));
+  }
+  RELIEF_TRY(remove_stale_temporaries_of(output));
+  const fs::path temp = temporary_name(output);
+  SplitReport report;
+  auto write = [&]() -> Status {
+    const Manifest& m = store.manifest();
+    for (uint32_t i = 0; i < shares; ++i) {
+      const fs::path dir = share_directory(temp, i);
+      RELIEF_TRY(link_or_copy(root / kManifestName, dir / kManifestName));
+      for (int level = m.min_level; level <= m.max_level; ++level) {
+        const std::string index = level_index_relative_path(level);
+        RELIEF_TRY(link_or_copy(root / index, dir / index));
+      }
+    }
+    for (int level = m.min_level; level <= m.max_level; ++level) {
+      for (const IndexEntry& e : store.index(level).entries()) {
+        const std::string tile = tile_relative_path(e.key);
+        const auto share = static_cast<uint32_t>(e.key.morton() % shares);
+        report.linked += RELIEF_TRY(link_or_copy(root / tile, share_directory(temp, share) / tile));
+        ++report.tiles;
+      }
+    }
+    fs::rename(temp, output, ec);
+    if (ec) return fail(fmt::format("{}: {}", output.string(), ec.message()));
+    return {};
+  };
+  if (auto done = write(); !done) {
+    fs::remove_all(temp, ec);
+    return std::unexpected(done.error());
+  }
+  return report;
+}
+
+}  // namespace relief::tiles
