@@ -111,6 +111,9 @@ TEST_F(MovieTest, BadInputIsAOneLineErrorAndNoMovie) {
                              movie.string(), "--size", "320x240"},
                             kNoMesaLeakReport),
                  not_json.string(), movie);
+  // FFmpeg lives in a module loaded for the first movie: one that will not load.
+  expect_refused(render(movie, {}, "RELIEF_VIDEO_MODULE=" + not_json.string() + " "),
+                 "video: cannot load " + not_json.string(), movie);
   expect_refused(run_relief({"render", store().string(), "--camera", "1.45,42.55,3600,20,-50,0",
                              "-o", movie.string()},
                             kNoMesaLeakReport),

@@ -1,8 +1,11 @@
 #include "encoder.h"
 
 #include <cassert>
+#include <type_traits>
 
 #include <fmt/format.h>
+
+#include "codecs.h"
 
 extern "C" {
 #include <libavcodec/avcodec.h>
@@ -15,40 +18,14 @@ namespace relief::video {
 
 namespace {
 
-// The codecs --codec may name, and the FFmpeg encoder of each.
-struct CodecName {
-  const char* name;
-  const char* encoder;
-};
-constexpr CodecName kCodecs[] = {{"h264", "libx264"}};
-
 std::string av_text(int code) {
   char text[AV_ERROR_MAX_STRING_SIZE] = {};
   av_strerror(code, text, sizeof text);
   return text;
 }
 
-}  // namespace
-
-std::string codec_names() {
-  std::string names;
-  for (const CodecName& c : kCodecs) names += (names.empty() ? "" : ", ") + std::string(c.name);
-  return names;
-}
-
-Status check_options(const VideoOptions& options) {
-  bool known = false;
-  for (const CodecName& c : kCodecs) known = known || options.codec == c.name;
-  if (!known) {
-    return fail(
-        fmt::format("--codec: '{}' is not a supported codec ({})", options.codec, codec_names()));
-  }
-  if (options.crf < 0 || options.crf > 51) return fail("--crf: must be in [0, 51]");
-  if (options.queue_frames < 1) return fail("video: the queue needs at least one frame");
-  return {};
-}
-
-struct Encoder::Impl {
+class FfmpegEncoder final : public Encoder {
+ public:
   std::string name;
   int width = 0, height = 0;
   AVFormatContext* format = nullptr;
@@ -59,7 +36,7 @@ struct Encoder::Impl {
   AVPacket* packet = nullptr;
   int64_t next_pts = 0;
 
-  ~Impl() {
+  ~FfmpegEncoder() override {
     sws_freeContext(sws);
     av_frame_free(&frame);
     av_packet_free(&packet);
@@ -146,46 +123,45 @@ struct Encoder::Impl {
     if (header < 0) return error("writing the MP4 header", header);
     return {};
   }
+
+  Status encode(std::span<const uint8_t> rgba) override {
+    assert(rgba.size() == static_cast<size_t>(width) * static_cast<size_t>(height) * 4);
+    if (int rc = av_frame_make_writable(frame); rc < 0) return error("frame buffer", rc);
+    const uint8_t* const planes[1] = {rgba.data()};
+    const int strides[1] = {width * 4};
+    sws_scale(sws, planes, strides, 0, height, frame->data, frame->linesize);
+    frame->pts = next_pts++;
+    return send(frame);
+  }
+
+  Status finish() override {
+    RELIEF_CHECK(send(nullptr));
+    if (int rc = av_write_trailer(format); rc < 0) return error("writing the MP4 index", rc);
+    if (int rc = avio_closep(&format->pb); rc < 0) return error("writing", rc);
+    return {};
+  }
 };
 
-Encoder::Encoder(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
-Encoder::~Encoder() = default;
-
-Result<std::unique_ptr<Encoder>> Encoder::open(const std::string& file, const std::string& name,
-                                               int width, int height, double fps,
-                                               const VideoOptions& options) {
-  RELIEF_CHECK(check_options(options));
-  if (width <= 0 || height <= 0 || width % 2 || height % 2) {
-    return fail(fmt::format("{}: {}x{}: a movie (H.264, yuv420p) needs an even width and height",
-                            name, width, height));
-  }
-  if (!(fps > 0)) return fail(fmt::format("{}: {} fps: must be positive", name, fps));
+Result<std::unique_ptr<Encoder>> open_encoder(const std::string& file, const std::string& name,
+                                              int width, int height, double fps,
+                                              const VideoOptions& options) {
   av_log_set_level(AV_LOG_QUIET);  // failures come back as values; x264 would chat on stderr
-  auto impl = std::make_unique<Impl>();
-  impl->name = name;
-  impl->width = width;
-  impl->height = height;
-  RELIEF_CHECK(impl->open(file, fps, options));
-  return std::unique_ptr<Encoder>(new Encoder(std::move(impl)));
+  auto encoder = std::make_unique<FfmpegEncoder>();
+  encoder->name = name;
+  encoder->width = width;
+  encoder->height = height;
+  RELIEF_CHECK(encoder->open(file, fps, options));
+  return encoder;
 }
 
-Status Encoder::encode(std::span<const uint8_t> rgba) {
-  Impl& m = *impl_;
-  assert(rgba.size() == static_cast<size_t>(m.width) * static_cast<size_t>(m.height) * 4);
-  if (int rc = av_frame_make_writable(m.frame); rc < 0) return m.error("frame buffer", rc);
-  const uint8_t* const planes[1] = {rgba.data()};
-  const int strides[1] = {m.width * 4};
-  sws_scale(m.sws, planes, strides, 0, m.height, m.frame->data, m.frame->linesize);
-  m.frame->pts = m.next_pts++;
-  return m.send(m.frame);
-}
-
-Status Encoder::finish() {
-  Impl& m = *impl_;
-  RELIEF_CHECK(m.send(nullptr));
-  if (int rc = av_write_trailer(m.format); rc < 0) return m.error("writing the MP4 index", rc);
-  if (int rc = avio_closep(&m.format->pb); rc < 0) return m.error("writing", rc);
-  return {};
-}
+}  // namespace
 
 }  // namespace relief::video
+
+// Checked against the type VideoWriter casts the symbol to.
+extern "C" [[gnu::visibility("default")]] relief::Result<std::unique_ptr<relief::video::Encoder>>
+relief_video_open_encoder(const std::string& file, const std::string& name, int width, int height,
+                          double fps, const relief::video::VideoOptions& options) {
+  return relief::video::open_encoder(file, name, width, height, fps, options);
+}
+static_assert(std::is_same_v<decltype(&relief_video_open_encoder), relief::video::OpenEncoder>);

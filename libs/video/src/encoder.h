@@ -1,6 +1,11 @@
 #pragma once
-// FFmpeg behind a small class: RGBA frames -> swscale (yuv420p) -> libx264 ->
-// the MP4 muxer, into one file. Private to libs/video: no FFmpeg type leaves it.
+// The encoder behind VideoWriter: RGBA frames -> swscale (yuv420p) -> libx264
+// -> the MP4 muxer, into one file. Private to libs/video.
+//
+// It lives in a module of its own (librelief_video_ffmpeg.so, encoder.cpp),
+// loaded on the first movie: linked into relief, FFmpeg's ~90 shared
+// libraries would add ~16 MB to the resident set of every command (`relief
+// build` included, whose memory budget covers the whole process).
 #include <cstdint>
 #include <memory>
 #include <span>
@@ -13,23 +18,20 @@ namespace relief::video {
 
 class Encoder {
  public:
-  // Writes to `file`; messages name `name` (the movie's final path).
-  static Result<std::unique_ptr<Encoder>> open(const std::string& file, const std::string& name,
-                                               int width, int height, double fps,
-                                               const VideoOptions& options);
-  ~Encoder();  // closes the file, complete or not
-  Encoder(const Encoder&) = delete;
-  Encoder& operator=(const Encoder&) = delete;
-
-  Status encode(std::span<const uint8_t> rgba);
+  virtual ~Encoder() = default;  // closes the file, complete or not
+  virtual Status encode(std::span<const uint8_t> rgba) = 0;
   // Drains the encoder, writes the MP4 index and closes the file.
-  Status finish();
-
-  struct Impl;
-
- private:
-  explicit Encoder(std::unique_ptr<Impl> impl);
-  std::unique_ptr<Impl> impl_;
+  virtual Status finish() = 0;
 };
+
+// Opens an encoder writing to `file`; messages name `name` (the movie's
+// final path). `options` passed check_options().
+using OpenEncoder = Result<std::unique_ptr<Encoder>> (*)(const std::string& file,
+                                                         const std::string& name, int width,
+                                                         int height, double fps,
+                                                         const VideoOptions& options);
+
+// The module's one entry point (dlsym), of type OpenEncoder.
+inline constexpr const char* kOpenEncoderSymbol = "relief_video_open_encoder";
 
 }  // namespace relief::video

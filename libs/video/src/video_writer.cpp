@@ -1,8 +1,12 @@
 #include "relief/video/video_writer.h"
 
+#include <dlfcn.h>
+#include <unistd.h>
+
 #include <cassert>
 #include <chrono>
 #include <condition_variable>
+#include <cstdlib>
 #include <deque>
 #include <mutex>
 #include <optional>
@@ -10,6 +14,7 @@
 
 #include <fmt/format.h>
 
+#include "codecs.h"
 #include "encoder.h"
 #include "relief/base/file_io.h"
 
@@ -23,7 +28,61 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
+// Where the encoder module may be: $RELIEF_VIDEO_MODULE, then beside an
+// installed program (bin/../lib/relief/), then the build tree.
+std::vector<fs::path> module_candidates() {
+  std::vector<fs::path> paths;
+  if (const char* env = std::getenv("RELIEF_VIDEO_MODULE"); env && *env) paths.emplace_back(env);
+  std::error_code ec;
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+  if (!ec)
+    paths.push_back(exe.parent_path().parent_path() / RELIEF_VIDEO_MODULE_INSTALL_SUBDIR /
+                    RELIEF_VIDEO_MODULE_NAME);
+  paths.emplace_back(RELIEF_VIDEO_MODULE_BUILD_PATH);
+  return paths;
+}
+
+// The encoder module, loaded once, on the first movie (encoder.h says why).
+Result<OpenEncoder> load_encoder() {
+  static std::mutex mutex;
+  static OpenEncoder open = nullptr;
+  std::lock_guard lock(mutex);
+  if (open) return open;
+  std::string tried;
+  for (const fs::path& path : module_candidates()) {
+    std::error_code ec;
+    if (!fs::exists(path, ec)) {
+      tried += (tried.empty() ? "" : ", ") + path.string();
+      continue;
+    }
+    void* module = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);  // kept for the process's life
+    if (!module) return fail(fmt::format("video: cannot load {}: {}", path.string(), dlerror()));
+    open = reinterpret_cast<OpenEncoder>(dlsym(module, kOpenEncoderSymbol));
+    if (!open) return fail(fmt::format("video: {} has no {}", path.string(), kOpenEncoderSymbol));
+    return open;
+  }
+  return fail("video: the FFmpeg encoder module is not installed (looked for " + tried + ")");
+}
+
 }  // namespace
+
+std::string codec_names() {
+  std::string names;
+  for (const CodecName& c : kCodecs) names += (names.empty() ? "" : ", ") + std::string(c.name);
+  return names;
+}
+
+Status check_options(const VideoOptions& options) {
+  bool known = false;
+  for (const CodecName& c : kCodecs) known = known || options.codec == c.name;
+  if (!known) {
+    return fail(
+        fmt::format("--codec: '{}' is not a supported codec ({})", options.codec, codec_names()));
+  }
+  if (options.crf < 0 || options.crf > 51) return fail("--crf: must be in [0, 51]");
+  if (options.queue_frames < 1) return fail("video: the queue needs at least one frame");
+  return {};
+}
 
 // The caller's thread fills `queue`; the encoder's thread empties it. An
 // encoder error is kept and returned by the next write() or by finish().
@@ -94,6 +153,14 @@ VideoWriter::~VideoWriter() {
 Result<std::unique_ptr<VideoWriter>> VideoWriter::open(const fs::path& path, int width, int height,
                                                        double fps, const VideoOptions& options) {
   RELIEF_CHECK(check_options(options));
+  if (width <= 0 || height <= 0 || width % 2 || height % 2) {
+    return fail(fmt::format("{}: {}x{}: a movie (H.264, yuv420p) needs an even width and height",
+                            path.string(), width, height));
+  }
+  if (!(fps > 0 && fps <= 1000)) {
+    return fail(fmt::format("{}: {} fps: must be in (0, 1000]", path.string(), fps));
+  }
+  const OpenEncoder open_encoder = RELIEF_TRY(load_encoder());
   RELIEF_CHECK(check_replaceable(path));
   if (path.has_parent_path()) {
     std::error_code ec;
@@ -108,8 +175,7 @@ Result<std::unique_ptr<VideoWriter>> VideoWriter::open(const fs::path& path, int
   impl->temporary = temporary_name(path);
   impl->frame_bytes = static_cast<size_t>(width) * static_cast<size_t>(height) * 4;
   impl->capacity = static_cast<size_t>(options.queue_frames);
-  auto encoder =
-      Encoder::open(impl->temporary.string(), path.string(), width, height, fps, options);
+  auto encoder = open_encoder(impl->temporary.string(), path.string(), width, height, fps, options);
   if (!encoder) {
     std::error_code ec;
     fs::remove(impl->temporary, ec);
