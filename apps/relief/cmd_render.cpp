@@ -17,6 +17,7 @@ namespace {
 constexpr const char* kHelp =
     R"(usage: relief render STORE [--imagery STORE2] (--camera C | --look-at L) -o FRAME.png [options]
        relief render STORE [--imagery STORE2] --path PATH.json -o DIR [options]
+       relief render STORE [--imagery STORE2] --path PATH.json -o MOVIE.mp4 [options]
 
 Renders an elevation store headless (EGL; Mesa's llvmpipe where there is no
 GPU). The mesh keeps every finest sample within --pixel-error pixels of
@@ -31,6 +32,8 @@ detail is loaded before drawing. A path (--path) is rendered frame by frame,
 by default in interactive mode: frames are drawn at once with what is
 resident while worker threads load what the view asks for, nearest the
 screen centre first, coarse before fine; --mode complete waits instead.
+With -o MOVIE.mp4 the frames are complete and encoded into an H.264 MP4
+(docs/video.md) while the next ones render; the file appears only once whole.
 
   --camera LON,LAT,HEIGHT,HEADING,PITCH,ROLL
                      eye position (degrees, metres above the WGS84 ellipsoid) and
@@ -41,7 +44,8 @@ screen centre first, coarse before fine; --mode complete waits instead.
                      "camera": [LON,LAT,HEIGHT,HEADING,PITCH,ROLL], "cut": false}, ...]}
                      (a "cut" keyframe is jumped to, not flown to)
 options:
-  -o, --output PATH  PNG to write (a still), or directory for frame_NNNNN.png (a path)
+  -o, --output PATH  PNG to write (a still), or directory for frame_NNNNN.png (a path),
+                     or MOVIE.mp4 (a path as a movie)
   --imagery STORE2   drape an imagery store; otherwise hypsometric colours with hillshade
   --size WxH         image size in pixels (default 1024x768)
   --fov DEG          vertical field of view (default 60)
@@ -71,6 +75,9 @@ path options:
   --max-frames N     refuse a path of more than N frames (default 100000)
   --events FILE      every tile lifecycle event as JSON lines
   --no-frames        do not write frame images (statistics only)
+movie options (-o MOVIE.mp4):
+  --codec C          h264 (default; libx264, yuv420p: even --size only)
+  --crf N            quality, 0 (lossless) to 51 (default 18; lower is better)
 )";
 
 // What a render reads and writes, for the check that no output replaces an input.
@@ -79,9 +86,9 @@ Status check_render_outputs(const Args& args) {
   for (const char* name : {"--imagery", "--path"}) {
     if (auto p = args.get(name)) inputs.push_back(*p);
   }
-  const bool path = args.get("--path").has_value();
+  const bool frames = args.get("--path") && !is_movie_output(*args.get("--output"));
   std::vector<Output> outputs = {
-      {"-o", *args.get("--output"), path ? OutputKind::Directory : OutputKind::File}};
+      {"-o", *args.get("--output"), frames ? OutputKind::Directory : OutputKind::File}};
   for (const char* name : {"--stats", "--events"}) {
     if (auto p = args.get(name)) outputs.push_back({name, *p});
   }
@@ -210,12 +217,20 @@ int run_render(const std::vector<std::string>& argv) {
                            {"--until-complete"},
                            {"--max-frames"},
                            {"--events"},
-                           {"--no-frames", "", false}},
+                           {"--no-frames", "", false},
+                           {"--codec"},
+                           {"--crf"}},
                           "render");
   if (!args) return report_error(args.error().message);
   if (!args->get("--output")) return report_error("render: -o is required");
   if (args->get("--path") && (args->get("--camera") || args->get("--look-at"))) {
     return report_error("render: --path replaces --camera and --look-at");
+  }
+  if (!args->get("--path")) {
+    if (is_movie_output(*args->get("--output"))) return report_error("-o: a movie needs --path");
+    for (const char* name : {"--codec", "--crf"}) {
+      if (args->get(name)) return report_error(std::string(name) + ": only for a movie (--path)");
+    }
   }
   if (auto safe = check_render_outputs(*args); !safe) return report_error(safe.error().message);
   auto setup = parse_render_setup(*args);

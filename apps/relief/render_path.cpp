@@ -1,10 +1,13 @@
 #include "render_path.h"
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <memory>
+#include <optional>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -12,8 +15,10 @@
 #include "commands.h"
 #include "relief/base/file_io.h"
 #include "relief/base/memory_use.h"
+#include "relief/base/progress.h"
 #include "relief/base/units.h"
 #include "relief/lod/camera_path.h"
+#include "relief/video/video_writer.h"
 #include "relief/view/path_file.h"
 #include "relief/view/path_player.h"
 
@@ -38,6 +43,8 @@ struct PathOptions {
   int max_frames = kDefaultMaxFrames;
   std::string events, stats;
   bool frames = true;
+  bool movie = false;  // -o *.mp4: complete frames encoded into one file
+  video::VideoOptions video;
 };
 
 Result<PathOptions> parse_path_options(const Args& args) {
@@ -77,6 +84,21 @@ Result<PathOptions> parse_path_options(const Args& args) {
   o.events = args.get("--events").value_or("");
   o.stats = args.get("--stats").value_or("");
   o.frames = !args.has("--no-frames");
+  o.movie = is_movie_output(*args.get("--output"));
+  if (!o.movie) {
+    for (const char* name : {"--codec", "--crf"}) {
+      if (args.get(name)) return fail(fmt::format("{}: only for a movie (-o FILE.mp4)", name));
+    }
+    return o;
+  }
+  if (o.interactive && args.get("--mode")) {
+    return fail("--mode interactive: a movie (-o *.mp4) is made of complete frames");
+  }
+  if (!o.frames) return fail("--no-frames: a movie (-o *.mp4) is its frames");
+  o.interactive = false;
+  o.video.codec = args.get("--codec").value_or(o.video.codec);
+  if (auto crf = RELIEF_TRY(args.get_int("--crf", 0, 51))) o.video.crf = *crf;
+  RELIEF_CHECK(video::check_options(o.video));
   return o;
 }
 
@@ -120,6 +142,13 @@ json loader_json(const stream::LoaderStats& s) {
 
 }  // namespace
 
+bool is_movie_output(const std::string& output) {
+  std::string extension = std::filesystem::path(output).extension().string();
+  std::ranges::transform(extension, extension.begin(),
+                         [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return extension == ".mp4";
+}
+
 int render_path(const Args& args, RenderSetup& setup, const Clock& clock) {
   auto options = parse_path_options(args);
   if (!options) return report_error(options.error().message);
@@ -143,7 +172,16 @@ int render_path(const Args& args, RenderSetup& setup, const Clock& clock) {
   }
   const auto path_frames = static_cast<size_t>(frame_count);
   const std::string out = *args.get("--output");
-  if (options->frames) {
+  std::unique_ptr<video::VideoWriter> movie;
+  if (options->movie) {  // created first: an unwritable movie fails before any frame
+    if (setup.width % 2 || setup.height % 2) {
+      return report_error(fmt::format("--size: {}x{}: a movie needs an even width and height",
+                                      setup.width, setup.height));
+    }
+    auto writer = video::VideoWriter::open(out, setup.width, setup.height, fps, options->video);
+    if (!writer) return report_error(writer.error().message);
+    movie = std::move(*writer);
+  } else if (options->frames) {
     std::error_code ec;
     std::filesystem::create_directories(out, ec);
     if (ec) return report_error(out + ": cannot create the frame directory: " + ec.message());
@@ -180,6 +218,8 @@ int render_path(const Args& args, RenderSetup& setup, const Clock& clock) {
     });
   }
   json frames = json::array();
+  std::unique_ptr<Progress> progress = make_progress_for_stderr();
+  progress->begin(options->movie ? "movie" : "frames", path_frames);
   view::PathCallbacks callbacks;
   callbacks.frame_start = [&](size_t i) { frame_index = i; };
   callbacks.frame_done = [&](const view::FrameRecord& r) -> Status {
@@ -228,8 +268,10 @@ int render_path(const Args& args, RenderSetup& setup, const Clock& clock) {
     }
     if (imagery_loader) f["imagery_memory"] = loader_json(imagery_loader->stats());
     frames.push_back(std::move(f));
+    progress->advance();
     if (!options->frames) return {};
-    const std::vector<uint8_t> pixels = RELIEF_TRY((*target)->read_rgba());
+    std::vector<uint8_t> pixels = RELIEF_TRY((*target)->read_rgba());
+    if (movie) return movie->write(std::move(pixels));  // encoded while the next frame renders
     const std::string file =
         (std::filesystem::path(out) / fmt::format("frame_{:05d}.png", r.index)).string();
     return write_png(file, pixels, setup.width, setup.height);
@@ -238,8 +280,15 @@ int render_path(const Args& args, RenderSetup& setup, const Clock& clock) {
   po.fps = fps;
   po.until_complete = options->until_complete;
   auto played = view::play_path(**scene, keys, path_frames, po, **target, clock, callbacks);
+  progress->end();
   if (!played) return report_error(played.error().message);
   const view::PathSummary& p = *played;
+  std::optional<video::VideoStats> movie_stats;
+  if (movie) {
+    auto finished = movie->finish();
+    if (!finished) return report_error(finished.error().message);
+    movie_stats = *finished;
+  }
 
   json cut_json = json::array();
   for (const view::CutReport& c : p.cuts) {
@@ -266,6 +315,15 @@ int render_path(const Args& args, RenderSetup& setup, const Clock& clock) {
                   {"prefetched", ls.prefetched},
                   {"prefetch_used", ls.prefetch_used},
                   {"cuts", cut_json}};
+  if (movie_stats) {
+    summary["movie"] = {{"file", out},
+                        {"codec", options->video.codec},
+                        {"crf", options->video.crf},
+                        {"frames", movie_stats->frames},
+                        {"bytes", movie_stats->bytes},
+                        {"encode_ms", movie_stats->encode_seconds * 1e3},
+                        {"write_wait_ms", movie_stats->write_wait_seconds * 1e3}};
+  }
   if (!options->stats.empty()) {
     if (auto st =
             write_json(options->stats, json{{"summary", summary}, {"frames", frames}}.dump(1));
@@ -285,6 +343,12 @@ int render_path(const Args& args, RenderSetup& setup, const Clock& clock) {
       p.complete ? "last frame complete" : "last frame NOT complete",
       static_cast<unsigned long long>(ls.loaded), static_cast<unsigned long long>(ls.failed),
       static_cast<double>(ls.bytes_fetched) / 1e6);
+  if (movie_stats) {
+    std::printf("wrote %s: %llu frames, %dx%d at %g fps, %.1f MB, %s crf %d\n", out.c_str(),
+                static_cast<unsigned long long>(movie_stats->frames), setup.width, setup.height,
+                fps, static_cast<double>(movie_stats->bytes) / 1e6, options->video.codec.c_str(),
+                options->video.crf);
+  }
   return 0;
 }
 

@@ -1,0 +1,12 @@
+#pragma once
+// The codecs --codec may name and the FFmpeg encoder of each; shared by the
+// option check (libs/video) and the encoder module.
+namespace relief::video {
+
+struct CodecName {
+  const char* name;
+  const char* encoder;
+};
+inline constexpr CodecName kCodecs[] = {{"h264", "libx264"}};
+
+}  // namespace relief::video

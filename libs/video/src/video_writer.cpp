@@ -1,0 +1,229 @@
+#include "relief/video/video_writer.h"
+
+#include <dlfcn.h>
+#include <unistd.h>
+
+#include <cassert>
+#include <chrono>
+#include <condition_variable>
+#include <cstdlib>
+#include <deque>
+#include <mutex>
+#include <optional>
+#include <thread>
+
+#include <fmt/format.h>
+
+#include "codecs.h"
+#include "encoder.h"
+#include "relief/base/file_io.h"
+
+namespace relief::video {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+// Where the encoder module may be: $RELIEF_VIDEO_MODULE, then beside an
+// installed program (bin/../lib/relief/), then the build tree.
+std::vector<fs::path> module_candidates() {
+  std::vector<fs::path> paths;
+  if (const char* env = std::getenv("RELIEF_VIDEO_MODULE"); env && *env) paths.emplace_back(env);
+  std::error_code ec;
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+  if (!ec)
+    paths.push_back(exe.parent_path().parent_path() / RELIEF_VIDEO_MODULE_INSTALL_SUBDIR /
+                    RELIEF_VIDEO_MODULE_NAME);
+  paths.emplace_back(RELIEF_VIDEO_MODULE_BUILD_PATH);
+  return paths;
+}
+
+// The encoder module, loaded once, on the first movie (encoder.h says why).
+Result<OpenEncoder> load_encoder() {
+  static std::mutex mutex;
+  static OpenEncoder open = nullptr;
+  std::lock_guard lock(mutex);
+  if (open) return open;
+  std::string tried;
+  for (const fs::path& path : module_candidates()) {
+    std::error_code ec;
+    if (!fs::exists(path, ec)) {
+      tried += (tried.empty() ? "" : ", ") + path.string();
+      continue;
+    }
+    void* module = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);  // kept for the process's life
+    if (!module) return fail(fmt::format("video: cannot load {}: {}", path.string(), dlerror()));
+    open = reinterpret_cast<OpenEncoder>(dlsym(module, kOpenEncoderSymbol));
+    if (!open) return fail(fmt::format("video: {} has no {}", path.string(), kOpenEncoderSymbol));
+    return open;
+  }
+  return fail("video: the FFmpeg encoder module is not installed (looked for " + tried + ")");
+}
+
+}  // namespace
+
+std::string codec_names() {
+  std::string names;
+  for (const CodecName& c : kCodecs) names += (names.empty() ? "" : ", ") + std::string(c.name);
+  return names;
+}
+
+Status check_options(const VideoOptions& options) {
+  bool known = false;
+  for (const CodecName& c : kCodecs) known = known || options.codec == c.name;
+  if (!known) {
+    return fail(
+        fmt::format("--codec: '{}' is not a supported codec ({})", options.codec, codec_names()));
+  }
+  if (options.crf < 0 || options.crf > 51) return fail("--crf: must be in [0, 51]");
+  if (options.queue_frames < 1) return fail("video: the queue needs at least one frame");
+  return {};
+}
+
+// The caller's thread fills `queue`; the encoder's thread empties it. An
+// encoder error is kept and returned by the next write() or by finish().
+struct VideoWriter::Impl {
+  fs::path path, temporary;
+  size_t frame_bytes = 0;
+  size_t capacity = 0;
+  std::unique_ptr<Encoder> encoder;
+  bool finished = false;
+
+  std::mutex mutex;
+  std::condition_variable space, work;
+  std::deque<std::vector<uint8_t>> queue;  // guarded by mutex
+  bool closing = false;                    // guarded by mutex
+  std::optional<Error> error;              // guarded by mutex
+  VideoStats stats;                        // frames and encode_seconds: encoder thread
+  std::thread thread;
+
+  void run() {
+    for (;;) {
+      std::vector<uint8_t> frame;
+      {
+        std::unique_lock lock(mutex);
+        work.wait(lock, [&] { return !queue.empty() || closing; });
+        if (queue.empty()) return;  // closing, all encoded
+        frame = std::move(queue.front());
+        queue.pop_front();
+      }
+      space.notify_one();
+      const auto start = std::chrono::steady_clock::now();
+      Status st = encoder->encode(frame);
+      stats.encode_seconds += seconds_since(start);
+      ++stats.frames;
+      if (!st) {
+        std::lock_guard lock(mutex);
+        error = st.error();
+        queue.clear();  // write() returns the error from now on
+        space.notify_all();
+        return;
+      }
+    }
+  }
+
+  void stop() {
+    {
+      std::lock_guard lock(mutex);
+      closing = true;
+    }
+    work.notify_one();
+    if (thread.joinable()) thread.join();
+  }
+
+  // Abandons the movie: the temporary file goes, the target is untouched.
+  void discard() {
+    stop();
+    encoder.reset();
+    std::error_code ec;
+    fs::remove(temporary, ec);
+  }
+};
+
+VideoWriter::VideoWriter(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+
+VideoWriter::~VideoWriter() {
+  if (impl_ && !impl_->finished) impl_->discard();
+}
+
+Result<std::unique_ptr<VideoWriter>> VideoWriter::open(const fs::path& path, int width, int height,
+                                                       double fps, const VideoOptions& options) {
+  RELIEF_CHECK(check_options(options));
+  if (width <= 0 || height <= 0 || width % 2 || height % 2) {
+    return fail(fmt::format("{}: {}x{}: a movie (H.264, yuv420p) needs an even width and height",
+                            path.string(), width, height));
+  }
+  if (!(fps > 0 && fps <= 1000)) {
+    return fail(fmt::format("{}: {} fps: must be in (0, 1000]", path.string(), fps));
+  }
+  const OpenEncoder open_encoder = RELIEF_TRY(load_encoder());
+  RELIEF_CHECK(check_replaceable(path));
+  if (path.has_parent_path()) {
+    std::error_code ec;
+    fs::create_directories(path.parent_path(), ec);
+    if (ec) {
+      return fail(fmt::format("{}: cannot create its directory: {}", path.string(), ec.message()));
+    }
+  }
+  (void)remove_stale_temporaries_of(path);  // of killed exports; best effort
+  auto impl = std::make_unique<Impl>();
+  impl->path = path;
+  impl->temporary = temporary_name(path);
+  impl->frame_bytes = static_cast<size_t>(width) * static_cast<size_t>(height) * 4;
+  impl->capacity = static_cast<size_t>(options.queue_frames);
+  auto encoder = open_encoder(impl->temporary.string(), path.string(), width, height, fps, options);
+  if (!encoder) {
+    std::error_code ec;
+    fs::remove(impl->temporary, ec);
+    return std::unexpected(encoder.error());
+  }
+  impl->encoder = std::move(*encoder);
+  impl->thread = std::thread([m = impl.get()] { m->run(); });
+  return std::unique_ptr<VideoWriter>(new VideoWriter(std::move(impl)));
+}
+
+Status VideoWriter::write(std::vector<uint8_t> rgba) {
+  Impl& m = *impl_;
+  assert(!m.finished);
+  assert(rgba.size() == m.frame_bytes);
+  const auto start = std::chrono::steady_clock::now();
+  {
+    std::unique_lock lock(m.mutex);
+    m.space.wait(lock, [&] { return m.queue.size() < m.capacity || m.error; });
+    if (m.error) return std::unexpected(*m.error);
+    m.queue.push_back(std::move(rgba));
+  }
+  m.stats.write_wait_seconds += seconds_since(start);
+  m.work.notify_one();
+  return {};
+}
+
+Result<VideoStats> VideoWriter::finish() {
+  Impl& m = *impl_;
+  assert(!m.finished);
+  m.stop();
+  Status st = m.error ? Status(std::unexpected(*m.error)) : m.encoder->finish();
+  if (st) {
+    std::error_code ec;
+    fs::rename(m.temporary, m.path, ec);
+    if (ec)
+      st = fail(fmt::format("{}: cannot rename the finished movie onto it: {}", m.path.string(),
+                            ec.message()));
+  }
+  if (!st) {
+    m.discard();
+    m.finished = true;
+    return std::unexpected(st.error());
+  }
+  m.finished = true;
+  m.encoder.reset();
+  std::error_code ec;
+  m.stats.bytes = fs::file_size(m.path, ec);
+  return m.stats;
+}
+
+}  // namespace relief::video
