@@ -2,7 +2,8 @@
 # The main job on bundled data: builds relief, turns the SRTM tiles of the
 # eastern Pyrenees and Catalonia into a tile pyramid, verifies it, describes
 # it, renders a still of it and flies over it (frames in out/pyrenees-flight/);
-# builds a whole-Earth DEM and imagery pair and renders the planet; then builds the Umbra SAR image into a store, reduces its speckle and
+# builds a whole-Earth DEM and imagery pair, renders the planet and a movie
+# descending from orbit; then builds the Umbra SAR image into a store, reduces its speckle and
 # dynamic range on every level, and detects point targets.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -31,6 +32,9 @@ PLANET=$(dirname "$OUT")
   --overwrite
 "$RELIEF" render "$PLANET/etopo5" --imagery "$PLANET/blue-marble" --camera 5,30,9000000,0,-90,0 \
   --size 1280x960 -o "$PLANET/earth.png"
+# A 6 s H.264 movie from orbit down towards the Pyrenees, every frame complete.
+"$RELIEF" render "$PLANET/etopo5" --imagery "$PLANET/blue-marble" \
+  --path data/paths/orbit-to-pyrenees.json --size 960x540 -o "$PLANET/planet-flight.mp4"
 
 SAR=$(dirname "$OUT")/umbra
 rm -rf "$SAR" "$SAR-lee" "$SAR-grey"
