@@ -24,6 +24,7 @@ commands:
   detect   find point targets in a SAR image: GeoJSON, analysis JSON and plot
   render   render a still of an elevation store (headless OpenGL), optionally with imagery
   serve    serve a store read-only over HTTP
+  view     fly over a store in a window (GLFW), record and play back camera paths
 
 Run 'relief <command> --help' for the options of a command.
 )";
@@ -72,6 +73,7 @@ int main(int argc, char** argv) {
     if (command == "detect") return relief::cli::run_detect(args);
     if (command == "render") return relief::cli::run_render(args);
     if (command == "serve") return relief::cli::run_serve(args);
+    if (command == "view") return relief::cli::run_view(args);
     if (command == "--version") {
       std::puts("relief 0.1.0");
       return 0;
