@@ -198,6 +198,41 @@ TEST_F(WindowTest, TheViewerKeysScreenshotAndRecord) {
   EXPECT_FALSE(*v->frame());
 }
 
+size_t differing_pixels(const std::vector<uint8_t>& a, const std::vector<uint8_t>& b) {
+  size_t n = 0;
+  for (size_t i = 0; i + 3 < std::min(a.size(), b.size()); i += 4) {
+    n += !std::equal(&a[i], &a[i + 3], &b[i]);
+  }
+  return n;
+}
+
+TEST_F(WindowTest, PanelsAreDrawnOverTheFrameButNotInScreenshots) {
+  ManualClock clock;
+  ViewerOptions o;
+  o.start = kCamera;
+  auto v = viewer(o, clock);
+  ASSERT_TRUE(v);
+  window_->set_keep_screen(true);
+  ASSERT_TRUE(v->frame());  // Dear ImGui sizes auto-resized panels in their first frame
+  clock.advance(100ms);
+  ASSERT_TRUE(v->frame());
+  auto frame = window_->target().read_rgba();
+  const std::vector<uint8_t>* screen = &window_->screen();
+  ASSERT_TRUE(frame);
+  ASSERT_EQ(screen->size(), frame->size());
+  EXPECT_GT(differing_pixels(*frame, *screen), size_t{1000})
+      << "the panels cover part of the frame";
+
+  view::InputEvent tab;
+  tab.type = Type::key_down, tab.key = view::Key::tab;
+  window_->deliver(tab);
+  clock.advance(100ms);
+  ASSERT_TRUE(v->frame());
+  frame = window_->target().read_rgba();
+  ASSERT_TRUE(frame);
+  EXPECT_EQ(differing_pixels(*frame, *screen), 0u) << "without panels the screen is the frame";
+}
+
 // ---- the command line -------------------------------------------------------
 
 double max_channel_difference(const testing::Image& a, const testing::Image& b, double* mean) {

@@ -71,7 +71,7 @@ void frame_statistics(Viewer::Impl& v) {
   if (!ImGui::CollapsingHeader("Frame", ImGuiTreeNodeFlags_DefaultOpen)) return;
   const std::vector<double> recent(v.recent_ms.begin(), v.recent_ms.end());
   const double p50 = view::percentile(recent, 0.5), p99 = view::percentile(recent, 0.99);
-  text(fmt::format("{:.1f} fps; frame p50 {:.1f} ms, p99 {:.1f} ms (last {})",
+  text(fmt::format("{:.1f} fps; p50 {:.1f} ms, p99 {:.1f} ms ({} frames)",
                    p50 > 0 ? 1e3 / p50 : 0.0, p50, p99, recent.size()));
   if (!v.report) return;
   const view::FrameReport& r = *v.report;

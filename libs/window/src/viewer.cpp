@@ -196,7 +196,10 @@ Result<bool> Viewer::frame() {
     const bool path_done =
         v.controller->mode() != view::ControlMode::playback || v.controller->finished();
     if (path_done && !v.path_end) v.path_end = v.time;
-    if (path_done && (report.complete || v.time - *v.path_end >= v.options.until_complete)) {
+    // Complete at the still threshold: a frame complete while the threshold
+    // is still relaxed after the motion is coarser than the still.
+    const bool done = report.complete && v.threshold <= still;
+    if (path_done && (done || v.time - *v.path_end >= v.options.until_complete)) {
       return false;
     }
   }
@@ -216,7 +219,8 @@ ViewerSummary Viewer::summary() const {
   s.seconds = v.time;
   s.p50_frame_ms = view::percentile(v.frame_ms, 0.5);
   s.p99_frame_ms = view::percentile(v.frame_ms, 0.99);
-  s.complete = v.report && v.report->complete;
+  s.complete =
+      v.report && v.report->complete && v.threshold <= v.scene_options.selection.pixel_error;
   s.path_finished = v.controller->mode() == view::ControlMode::playback && v.controller->finished();
   s.frames_list = v.frames;
   s.recorded = v.recorded;

@@ -1,5 +1,6 @@
 #include "relief/window/window.h"
 
+#include <algorithm>
 #include <cassert>
 #include <string>
 
@@ -52,7 +53,8 @@ struct Window::Impl {
   GLFWwindow* window = nullptr;
   ResizableTarget target;
   InputHandler handler;
-  bool vsync = true, imgui = false, fullscreen = false;
+  bool vsync = true, imgui = false, fullscreen = false, keep_screen = false;
+  std::vector<uint8_t> screen;
   int windowed_x = 0, windowed_y = 0, windowed_width = 0, windowed_height = 0;
 
   ~Impl() {
@@ -122,6 +124,21 @@ void on_scroll(GLFWwindow* w, double x, double y) {
   e.type = view::InputEvent::Type::scroll;
   e.x = x, e.y = y;
   owner(w).deliver(e);
+}
+
+// The default framebuffer's back buffer (before the swap makes it undefined).
+void read_back_buffer(int width, int height, std::vector<uint8_t>& out) {
+  std::vector<uint8_t> bottom_up(static_cast<size_t>(width) * height * 4);
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, 0);
+  glReadBuffer(GL_BACK);
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  glReadPixels(0, 0, width, height, GL_RGBA, GL_UNSIGNED_BYTE, bottom_up.data());
+  out.resize(bottom_up.size());
+  const size_t row = static_cast<size_t>(width) * 4;
+  for (int y = 0; y < height; ++y) {
+    std::copy_n(&bottom_up[static_cast<size_t>(height - 1 - y) * row], row,
+                &out[static_cast<size_t>(y) * row]);
+  }
 }
 
 void on_framebuffer_size(GLFWwindow* w, int width, int height) {
@@ -233,7 +250,17 @@ void Window::present(const std::function<void()>& ui) {
     ImGui::Render();
     ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
   }
+  if (impl_->keep_screen) read_back_buffer(width, height, impl_->screen);
   glfwSwapBuffers(impl_->window);
+}
+
+void Window::set_keep_screen(bool on) {
+  impl_->keep_screen = on;
+  if (!on) impl_->screen.clear();
+}
+
+const std::vector<uint8_t>& Window::screen() const {
+  return impl_->screen;
 }
 
 void Window::set_vsync(bool on) {

@@ -16,6 +16,7 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "relief/base/result.h"
 #include "relief/render/render_target.h"
@@ -55,6 +56,12 @@ class Window {
   // Copies the target to the screen, draws `ui` (Dear ImGui calls, may be
   // empty) over it and swaps buffers.
   void present(const std::function<void()>& ui);
+
+  // While on, present() keeps a copy of what it puts on the screen (frame
+  // and panels; a read-back per frame, so off by default): screen() returns
+  // it, RGBA8 top row first, the window's framebuffer size (empty before).
+  void set_keep_screen(bool on);
+  const std::vector<uint8_t>& screen() const;
 
   void set_vsync(bool on);
   bool vsync() const;
