@@ -164,7 +164,7 @@ TEST_F(WindowTest, DeliveredInputReachesTheControllerAtTheNextFrame) {
   EXPECT_EQ(c.pushed[4].type, Type::resize);
 }
 
-TEST_F(WindowTest, TheViewerKeysScreenshotAndRecord) {
+TEST_F(WindowTest, TheViewerKeysScreenshotRecordSwitchVsyncAndFullscreenAndQuit) {
   ScratchDir dir("window_keys");
   ManualClock clock;
   ViewerOptions o;
@@ -193,6 +193,31 @@ TEST_F(WindowTest, TheViewerKeysScreenshotAndRecord) {
   ASSERT_EQ(s.recorded.size(), 3u);
   EXPECT_DOUBLE_EQ(s.recorded[2].time, 0.2);
   EXPECT_EQ(s.recorded[2].camera.lon, kCamera.lon);
+
+  const bool vsync = window_->vsync();
+  e.key = view::Key::f8;
+  window_->deliver(e);
+  EXPECT_NE(window_->vsync(), vsync);
+  // Fullscreen on the X server's screen, and back; frames follow the size.
+  e.key = view::Key::f11;
+  window_->deliver(e);
+  EXPECT_TRUE(window_->fullscreen());
+  // The X server answers asynchronously: a few frames at most.
+  auto frames_until_width = [&](int width) {
+    for (int i = 0; i < 50 && window_->target().width() != width; ++i) {
+      ASSERT_TRUE(v->frame());
+      std::this_thread::sleep_for(10ms);
+    }
+  };
+  frames_until_width(1280);
+  EXPECT_EQ(window_->target().width(), 1280);
+  EXPECT_EQ(window_->target().height(), 1024);
+  window_->deliver(e);
+  EXPECT_FALSE(window_->fullscreen());
+  frames_until_width(kWidth);
+  EXPECT_EQ(window_->target().width(), kWidth);
+  EXPECT_EQ(window_->target().height(), kHeight);
+
   e.key = view::Key::escape;
   window_->deliver(e);
   EXPECT_FALSE(*v->frame());
