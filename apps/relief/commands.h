@@ -16,6 +16,7 @@ int run_fuse(const std::vector<std::string>& args);
 int run_detect(const std::vector<std::string>& args);
 int run_render(const std::vector<std::string>& args);
 int run_serve(const std::vector<std::string>& args);
+int run_view(const std::vector<std::string>& args);
 
 // Prints "relief: <message>" on stderr and returns 1.
 int report_error(const std::string& message);

@@ -25,6 +25,7 @@ commands:
   render   render a still of an elevation store (headless OpenGL), optionally with imagery
   serve    serve a store read-only over HTTP
   split    spread a store over several servers (cyclic shares)
+  view     fly over a store in a window (GLFW), record and play back camera paths
 
 Run 'relief <command> --help' for the options of a command.
 )";
@@ -74,6 +75,7 @@ int main(int argc, char** argv) {
     if (command == "render") return relief::cli::run_render(args);
     if (command == "serve") return relief::cli::run_serve(args);
     if (command == "split") return relief::cli::run_split(args);
+    if (command == "view") return relief::cli::run_view(args);
     if (command == "--version") {
       std::puts("relief 0.1.0");
       return 0;

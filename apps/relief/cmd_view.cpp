@@ -1,0 +1,253 @@
+// `relief view`: argument parsing and output around the viewer (libs/window).
+#include <unistd.h>
+
+#include <cstdio>
+#include <filesystem>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "args.h"
+#include "commands.h"
+#include "output_safety.h"
+#include "relief/view/path_file.h"
+#include "relief/window/viewer.h"
+#include "relief/window/window.h"
+#include "render_setup.h"
+
+namespace relief::cli {
+
+namespace {
+
+constexpr const char* kHelp =
+    R"(usage: relief view STORE [--imagery STORE2] [--camera C | --look-at L] [options]
+       relief view STORE --play PATH.json [--exit-when-done] [--stats STATS.json]
+
+Opens a window (GLFW, OpenGL 4.5 core; Mesa's llvmpipe where there is no GPU)
+and flies over an elevation store. Frames never wait for I/O: they draw what
+is resident while worker threads load what the view asks for. Without a
+display, `relief render` draws stills and camera paths headless.
+
+Keys: Tab or F1 panels, F8 vsync, F9 start/stop recording, F11 fullscreen,
+F12 screenshot (terrain only, PNG), Escape quit; the control mode takes the rest.
+
+  --camera LON,LAT,HEIGHT,HEADING,PITCH,ROLL   the start (as relief render)
+  --look-at LON,LAT,HEIGHT,RANGE,HEADING,PITCH  (default: the whole store)
+options:
+  --imagery STORE2   drape an imagery store (a layer the panels switch on and off)
+  --size WxH         window size in pixels (default 1024x768)
+  --mode M           orbit (default), aircraft, walk or motorbike
+  --pixel-error E    largest screen-space error in pixels when still (default 1)
+  --no-speed-lod     do not relax the pixel error while the view moves
+  --play PATH.json   play a camera path (the JSON that relief render --path reads)
+  --exit-when-done   quit once the path has ended (at once without --play) and a
+                     frame is complete, or --until-complete seconds later
+  --until-complete S (default 30)
+  --stats FILE       per-frame statistics and a summary as JSON, written at exit
+  --record FILE      record the camera of every frame to a path JSON, written at
+                     exit (F9 pauses and resumes)
+  --screenshot FILE  write the last frame (terrain only) as PNG at exit
+  --screenshot-dir DIR  where F12 writes relief_NNNN.png (default .)
+  --no-panels        start with the panels hidden
+  --no-vsync         do not wait for the display's refresh
+  --fov, --exaggeration, --lod, --sky, --gpu-budget, --cache, --cache-size
+                     as relief render
+)";
+
+// An output written at exit must be writable now, not after a long session.
+Status check_writable(const char* option, const std::string& path) {
+  std::filesystem::path dir = std::filesystem::path(path).parent_path();
+  if (dir.empty()) dir = ".";
+  std::error_code ec;
+  if (!std::filesystem::is_directory(dir, ec)) {
+    return fail(fmt::format("{}: {}: {} is not a directory", option, path, dir.string()));
+  }
+  if (::access(dir.c_str(), W_OK) != 0) {
+    return fail(fmt::format("{}: {}: cannot write in {}", option, path, dir.string()));
+  }
+  return {};
+}
+
+Status check_view_outputs(const Args& args) {
+  std::vector<std::string> inputs = args.positional();
+  for (const char* name : {"--imagery", "--play"}) {
+    if (auto p = args.get(name)) inputs.push_back(*p);
+  }
+  std::vector<Output> outputs;
+  for (const char* name : {"--stats", "--record", "--screenshot"}) {
+    if (auto p = args.get(name)) {
+      RELIEF_CHECK(check_writable(name, *p));
+      outputs.push_back({name, *p});
+    }
+  }
+  if (auto p = args.get("--screenshot-dir")) {
+    std::error_code ec;
+    if (!std::filesystem::is_directory(*p, ec)) {
+      return fail("--screenshot-dir: " + *p + " is not a directory");
+    }
+    outputs.push_back({"--screenshot-dir", *p, OutputKind::Directory});
+  }
+  return check_outputs_spare_inputs(outputs, inputs);
+}
+
+// The whole store, seen from the south at 45 degrees.
+lod::Camera default_camera(const RenderSetup& s) {
+  const geo::GeoBox& e = s.store.manifest().extent;
+  const double range = std::max(e.height(), e.width() * 0.75) * 111e3 * 1.2;
+  return lod::look_at(0.5 * (e.west + e.east), 0.5 * (e.south + e.north), 0, range, 0, -45, s.fov,
+                      s.width, s.height);
+}
+
+Result<window::ViewerOptions> viewer_options(const Args& args, const RenderSetup& setup) {
+  window::ViewerOptions o;
+  if (auto mode = args.get("--mode")) {
+    auto m = view::parse_control_mode(*mode);
+    if (!m || *m == view::ControlMode::playback) {
+      return fail("--mode: '" + *mode + "' is none of orbit, aircraft, walk, motorbike");
+    }
+    o.mode = *m;
+  }
+  if (args.get("--camera") || args.get("--look-at")) {
+    o.start = RELIEF_TRY(parse_camera(args, setup));
+  } else {
+    o.start = default_camera(setup);
+  }
+  if (auto play = args.get("--play")) {
+    view::PathFile path = RELIEF_TRY(view::read_path_file(
+        *play, [&](const std::string& where, const std::vector<double>& values) {
+          return camera_from_values(where, values, setup);
+        }));
+    o.mode = view::ControlMode::playback;
+    o.start = path.keyframes.front().camera;
+    o.controller.path = std::move(path.keyframes);
+    o.record_fps = path.fps;
+  }
+  o.speed_lod.enabled = !args.has("--no-speed-lod");
+  o.exit_when_done = args.has("--exit-when-done");
+  if (auto s = RELIEF_TRY(args.get_double("--until-complete"))) {
+    if (!(*s >= 0 && *s <= 3600)) return fail("--until-complete: must be in [0, 3600] s");
+    o.until_complete = *s;
+  }
+  o.record = args.get("--record").has_value();
+  o.screenshot_dir = args.get("--screenshot-dir").value_or(".");
+  o.panels = !args.has("--no-panels");
+  o.collect_frames = args.get("--stats").has_value();
+  return o;
+}
+
+nlohmann::json stats_json(const window::ViewerSummary& s, const std::string& renderer) {
+  nlohmann::json frames = nlohmann::json::array();
+  for (const window::ViewerFrame& f : s.frames_list) {
+    const lod::Camera& c = f.camera;
+    frames.push_back({{"frame", f.index},
+                      {"time", f.time},
+                      {"frame_ms", f.frame_ms},
+                      {"draw_ms", f.draw_ms},
+                      {"pixel_error", f.pixel_error},
+                      {"camera", {c.lon, c.lat, c.height, c.heading, c.pitch, c.roll}},
+                      {"quads", f.quads},
+                      {"triangles", f.triangles},
+                      {"triangles_per_pixel", f.triangles_per_pixel},
+                      {"uploaded_bytes", f.uploaded_bytes},
+                      {"complete", f.complete}});
+  }
+  auto fps = [](double ms) { return ms > 0 ? 1e3 / ms : 0.0; };
+  nlohmann::json summary = {{"frames", s.frames},
+                            {"seconds", s.seconds},
+                            {"fps_p50", fps(s.p50_frame_ms)},
+                            {"fps_p99", fps(s.p99_frame_ms)},  // the fps of the p99 frame time
+                            {"p50_frame_ms", s.p50_frame_ms},
+                            {"p99_frame_ms", s.p99_frame_ms},
+                            {"complete", s.complete},
+                            {"path_finished", s.path_finished},
+                            {"renderer", renderer}};
+  return {{"summary", summary}, {"frames", frames}};
+}
+
+int view_session(const Args& args, RenderSetup& setup) {
+  auto options = viewer_options(args, setup);
+  if (!options) return report_error(options.error().message);
+  view::SceneOptions so = scene_options(setup);
+  so.interactive = true;
+  so.loader.memory_budget = uint64_t{512} << 20;
+  so.lookahead_frames = 15;  // half a second ahead at 30 fps
+
+  window::WindowOptions wo;
+  wo.width = setup.width;
+  wo.height = setup.height;
+  wo.title = "relief: " + args.positional()[0];
+  wo.vsync = !args.has("--no-vsync");
+  auto window = window::Window::create(wo);
+  if (!window) return report_error(window.error().message);
+  auto viewer =
+      window::Viewer::create(**window, setup.store, setup.imagery ? &*setup.imagery : nullptr, so,
+                             *options, steady_clock());
+  if (!viewer) return report_error(viewer.error().message);
+  auto summary = (*viewer)->run();
+  if (!summary) return report_error(summary.error().message);
+
+  if (auto path = args.get("--screenshot")) {
+    if (auto st = (*viewer)->screenshot(*path); !st) return report_error(st.error().message);
+  }
+  if (auto path = args.get("--record")) {
+    if (summary->recorded.empty()) return report_error("--record: no frame was recorded");
+    view::PathFile file{options->record_fps, summary->recorded};
+    if (auto st = view::write_path_file(*path, file); !st) {
+      return report_error(st.error().message);
+    }
+  }
+  if (auto path = args.get("--stats")) {
+    const std::string text = stats_json(*summary, (*window)->renderer()).dump(1);
+    if (auto st = write_json(*path, text); !st) return report_error(st.error().message);
+  }
+  std::printf("%zu frames in %.1f s: frame time p50 %.1f ms, p99 %.1f ms; last frame %s\n",
+              summary->frames, summary->seconds, summary->p50_frame_ms, summary->p99_frame_ms,
+              summary->complete ? "complete" : "NOT complete");
+  return 0;
+}
+
+}  // namespace
+
+int run_view(const std::vector<std::string>& argv) {
+  if (wants_help(argv)) return print_help(kHelp);
+  auto args = Args::parse(argv,
+                          {{"--imagery"},
+                           {"--camera"},
+                           {"--look-at"},
+                           {"--size"},
+                           {"--mode"},
+                           {"--pixel-error"},
+                           {"--no-speed-lod", "", false},
+                           {"--play"},
+                           {"--exit-when-done", "", false},
+                           {"--until-complete"},
+                           {"--stats"},
+                           {"--record"},
+                           {"--screenshot"},
+                           {"--screenshot-dir"},
+                           {"--no-panels", "", false},
+                           {"--no-vsync", "", false},
+                           {"--fov"},
+                           {"--exaggeration"},
+                           {"--lod"},
+                           {"--sky"},
+                           {"--gpu-budget"},
+                           {"--cache"},
+                           {"--cache-size"}},
+                          "view");
+  if (!args) return report_error(args.error().message);
+  if (args->positional().size() != 1) return report_error("view: expected exactly one STORE");
+  if (args->get("--camera") && args->get("--look-at")) {
+    return report_error("view: give at most one of --camera and --look-at");
+  }
+  if (args->get("--play") &&
+      (args->get("--camera") || args->get("--look-at") || args->get("--mode"))) {
+    return report_error("view: --play replaces --camera, --look-at and --mode");
+  }
+  if (auto safe = check_view_outputs(*args); !safe) return report_error(safe.error().message);
+  auto setup = parse_render_setup(*args);
+  if (!setup) return report_error(setup.error().message);
+  return view_session(*args, *setup);
+}
+
+}  // namespace relief::cli

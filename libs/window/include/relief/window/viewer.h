@@ -1,0 +1,109 @@
+#pragma once
+// The interactive viewer's loop (`relief view`): each frame polls the
+// window's input, moves the camera by the active controller over the time
+// since the previous frame (on the injected clock), relaxes the pixel error
+// with the view's speed, draws the scene into the window (never waiting for
+// I/O), draws the panels over it and swaps. Scripted sessions play a path
+// through the playback controller and end when it is done.
+//
+// Keys the viewer keeps for itself (everything else goes to the controller):
+//   Tab, F1  panels on/off        F8   vsync on/off
+//   F9       recording on/off     F11  fullscreen
+//   F12      screenshot (PNG)     Escape  quit
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "relief/base/clock.h"
+#include "relief/base/result.h"
+#include "relief/lod/camera_path.h"
+#include "relief/view/controller.h"
+#include "relief/view/scene.h"
+#include "relief/view/speed_lod.h"
+#include "relief/window/window.h"
+
+namespace relief::window {
+
+struct ViewerOptions {
+  view::ControlMode mode = view::ControlMode::orbit;
+  lod::Camera start;                   // viewport: replaced by the window's
+  view::ControllerOptions controller;  // playback: the path
+  view::SpeedLodOptions speed_lod;
+  // Scripted sessions: quit once the path has ended (at once without one)
+  // and a frame is complete, or `until_complete` seconds after it ended.
+  bool exit_when_done = false;
+  double until_complete = 30;
+  bool record = false;     // recording from the first frame (F9 toggles it)
+  double record_fps = 30;  // the "fps" of the path file written
+  std::string screenshot_dir = ".";
+  bool panels = true;
+  bool collect_frames = false;  // keep every frame's record (for --stats)
+};
+
+// One frame as the statistics see it.
+struct ViewerFrame {
+  size_t index = 0;
+  double time = 0;         // seconds since the session started, on the clock
+  double frame_ms = 0;     // since the previous frame's start (1000 / fps)
+  double draw_ms = 0;      // the scene's frame: selection to the end of drawing
+  double pixel_error = 0;  // the threshold used (speed-relaxed)
+  lod::Camera camera;
+  uint32_t quads = 0;
+  uint64_t triangles = 0;
+  double triangles_per_pixel = 0;
+  uint64_t uploaded_bytes = 0;  // geometry and textures
+  bool complete = false;
+};
+
+struct ViewerSummary {
+  size_t frames = 0;
+  double seconds = 0;
+  double p50_frame_ms = 0, p99_frame_ms = 0;  // over every frame but the first
+  bool complete = false;                      // the last frame
+  bool path_finished = false;                 // playback reached the path's end
+  std::vector<ViewerFrame> frames_list;       // collect_frames only
+  std::vector<lod::Keyframe> recorded;        // the cameras recorded
+  std::vector<std::string> screenshots;       // files written by F12
+};
+
+class Viewer {
+ public:
+  // `elevation`, `imagery` (may be null), `window` and `clock` outlive the
+  // viewer. The scene is made here (and again when the imagery layer is
+  // switched on or off).
+  static Result<std::unique_ptr<Viewer>> create(Window& window, const tiles::Store& elevation,
+                                                const tiles::Store* imagery,
+                                                const view::SceneOptions& scene,
+                                                const ViewerOptions& options, const Clock& clock);
+  ~Viewer();
+  Viewer(const Viewer&) = delete;
+  Viewer& operator=(const Viewer&) = delete;
+
+  // One frame. False when the session is over (window closed, Escape, or a
+  // scripted session done).
+  Result<bool> frame();
+  // frame() until the session is over.
+  Result<ViewerSummary> run();
+  ViewerSummary summary() const;
+
+  // What input reaches (window.deliver() goes through here).
+  view::Controller& controller();
+  void set_controller(std::unique_ptr<view::Controller> controller);
+  view::Scene& scene();
+  bool panels_visible() const;
+  bool recording() const;
+  // The last frame's pixels (terrain only) as a PNG, atomically.
+  Status screenshot(const std::string& path);
+
+  struct Impl;
+
+ private:
+  explicit Viewer(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+// Writes RGBA pixels (top row first) as a PNG, atomically.
+Status write_png(const std::string& path, std::span<const uint8_t> rgba, int width, int height);
+
+}  // namespace relief::window

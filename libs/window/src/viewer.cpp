@@ -1,0 +1,255 @@
+#include "relief/window/viewer.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+
+#include <fmt/format.h>
+
+#include "relief/base/file_io.h"
+#include "relief/tiles/codec.h"
+#include "relief/view/path_player.h"
+#include "viewer_state.h"
+
+namespace relief::window {
+
+namespace {
+constexpr size_t kRecentFrames = 120;  // the panels' statistics window
+}
+
+Status write_png(const std::string& path, std::span<const uint8_t> rgba, int width, int height) {
+  tiles::Raster image(tiles::SampleType::UInt8, 4, width, height);
+  std::copy(rgba.begin(), rgba.end(), image.u8().begin());
+  auto png = RELIEF_TRY(tiles::encode(image, tiles::CodecOptions{tiles::Codec::Png}));
+  return write_file_atomic(path, png);
+}
+
+Status Viewer::Impl::make_scene() {
+  scene.reset();  // its GPU memory goes before the new one's arrives
+  view::SceneOptions so = scene_options;
+  const tiles::Store* layer = imagery_on ? imagery : nullptr;
+  if (!layer) so.selection.texture = nullptr;
+  scene = RELIEF_TRY(view::Scene::create(elevation, layer, so, clock));
+  progress = {};
+  return {};
+}
+
+namespace {
+
+// Keys the viewer keeps: neither their press nor their release reaches the controller.
+bool viewer_key(view::Key key) {
+  using view::Key;
+  return key == Key::tab || key == Key::f1 || key == Key::f8 || key == Key::f9 || key == Key::f11 ||
+         key == Key::f12 || key == Key::escape;
+}
+
+}  // namespace
+
+void Viewer::Impl::on_window_key(view::Key key) {
+  using view::Key;
+  switch (key) {
+    case Key::tab:
+    case Key::f1:
+      panels = !panels;
+      break;
+    case Key::f8:
+      window.set_vsync(!window.vsync());
+      break;
+    case Key::f9:
+      recording = !recording;
+      record_cut = recording && !recorded.empty();  // a resumed recording jumps
+      break;
+    case Key::f11:
+      window.toggle_fullscreen();
+      break;
+    case Key::f12:
+      take_screenshot();
+      break;
+    case Key::escape:
+      quit = true;
+      break;
+    default:
+      break;
+  }
+}
+
+void Viewer::Impl::on_input(const view::InputEvent& e) {
+  using Type = view::InputEvent::Type;
+  if ((e.type == Type::key_down || e.type == Type::key_up) && viewer_key(e.key)) {
+    if (e.type == Type::key_down) on_window_key(e.key);
+    return;
+  }
+  if (e.type == Type::cursor) cursor_x = e.x, cursor_y = e.y;
+  controller->push(e);
+}
+
+void Viewer::Impl::record(const lod::Camera& camera) {
+  // Keyframe times must increase: a frame drawn at the same instant as the
+  // previous one (a clock that did not move) adds nothing.
+  if (!recorded.empty() && !(time > recorded.back().time)) return;
+  recorded.push_back({time, camera, record_cut});
+  record_cut = false;
+}
+
+Status Viewer::Impl::write_screenshot(const std::string& path) {
+  render::RenderTarget& target = window.target();
+  const std::vector<uint8_t> pixels = RELIEF_TRY(target.read_rgba());
+  RELIEF_CHECK(write_png(path, pixels, target.width(), target.height()));
+  screenshots.push_back(path);
+  return {};
+}
+
+void Viewer::Impl::take_screenshot() {
+  if (!report) return;
+  std::filesystem::path path;
+  for (int n = static_cast<int>(screenshots.size());; ++n) {
+    path = std::filesystem::path(options.screenshot_dir) / fmt::format("relief_{:04d}.png", n);
+    if (!std::filesystem::exists(path)) break;
+  }
+  if (Status st = write_screenshot(path.string()); !st) {
+    std::fprintf(stderr, "relief: %s\n", st.error().message.c_str());
+  }
+}
+
+Result<std::unique_ptr<Viewer>> Viewer::create(Window& window, const tiles::Store& elevation,
+                                               const tiles::Store* imagery,
+                                               const view::SceneOptions& scene,
+                                               const ViewerOptions& options, const Clock& clock) {
+  auto impl = std::make_unique<Impl>(window, elevation, imagery, scene, options, clock);
+  impl->imagery_on = impl->imagery_wanted = imagery != nullptr;
+  impl->panels = options.panels;
+  impl->recording = options.record;
+  impl->threshold = scene.selection.pixel_error;
+  RELIEF_CHECK(impl->make_scene());
+  lod::Camera start = options.start;
+  start.width = window.target().width();
+  start.height_px = window.target().height();
+  impl->controller = view::make_controller(options.mode, start, options.controller);
+  std::unique_ptr<Viewer> v(new Viewer(std::move(impl)));
+  window.set_input_handler(
+      [impl = v->impl_.get()](const view::InputEvent& e) { impl->on_input(e); });
+  return v;
+}
+
+Viewer::Viewer(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+
+Viewer::~Viewer() {
+  if (impl_) impl_->window.set_input_handler({});
+}
+
+Result<bool> Viewer::frame() {
+  Impl& v = *impl_;
+  v.window.poll_events();
+  if (v.quit || v.window.should_close()) return false;
+  const Clock::TimePoint now = v.clock.now();
+  if (!v.start) v.start = v.last = now;
+  const double dt = seconds_between(*v.last, now);
+  v.last = now;
+  v.time = seconds_between(*v.start, now);
+  if (v.imagery_wanted != v.imagery_on) {
+    v.imagery_on = v.imagery_wanted;
+    RELIEF_CHECK(v.make_scene());
+  }
+
+  const view::Ground ground = view::resident_ground(*v.scene);
+  lod::Camera camera = v.controller->update(dt, ground);
+  render::RenderTarget& target = v.window.target();
+  camera.width = target.width();
+  camera.height_px = target.height();
+  const double still = v.scene_options.selection.pixel_error;
+  const double above = camera.height - ground(camera.lon, camera.lat).value_or(0.0);
+  v.threshold = v.speed_lod.threshold(still, dt, v.controller->angular_speed(),
+                                      v.controller->linear_speed(), std::max(above, 1.0));
+  v.scene->set_pixel_error(v.threshold);
+  const view::FrameReport report = RELIEF_TRY(v.scene->draw(camera, target));
+  v.report = report;
+  if (v.recording) v.record(camera);
+
+  if (v.index > 0) {
+    v.frame_ms.push_back(dt * 1e3);
+    v.recent_ms.push_back(dt * 1e3);
+    if (v.recent_ms.size() > kRecentFrames) v.recent_ms.pop_front();
+  }
+  if (v.options.collect_frames) {
+    v.frames.push_back({v.index, v.time, v.index > 0 ? dt * 1e3 : 0.0, report.frame_seconds * 1e3,
+                        v.threshold, camera, report.selection.quads, report.draw.triangles,
+                        report.draw.triangles_per_pixel(),
+                        report.draw.geometry_bytes + report.draw.texture_bytes, report.complete});
+  }
+  if (stream::TileLoader* loader = v.scene->elevation_loader()) {
+    const stream::LoaderStats s = loader->stats();
+    v.progress.update(s);
+    v.elevation_rate.update(v.time, s);
+  }
+  if (stream::TileLoader* loader = v.scene->imagery_loader()) {
+    v.imagery_rate.update(v.time, loader->stats());
+  }
+  if (v.panels) {
+    v.pick = v.cursor_x >= 0 ? view::pick(camera, v.cursor_x, v.cursor_y, ground) : std::nullopt;
+    v.window.present([&v] { draw_panels(v); });
+  } else {
+    v.window.present({});
+  }
+  ++v.index;
+
+  if (v.options.exit_when_done) {
+    const bool path_done =
+        v.controller->mode() != view::ControlMode::playback || v.controller->finished();
+    if (path_done && !v.path_end) v.path_end = v.time;
+    // Complete at the still threshold: a frame complete while the threshold
+    // is still relaxed after the motion is coarser than the still.
+    const bool done = report.complete && v.threshold <= still;
+    if (path_done && (done || v.time - *v.path_end >= v.options.until_complete)) {
+      return false;
+    }
+  }
+  return true;
+}
+
+Result<ViewerSummary> Viewer::run() {
+  while (RELIEF_TRY(frame())) {
+  }
+  return summary();
+}
+
+ViewerSummary Viewer::summary() const {
+  const Impl& v = *impl_;
+  ViewerSummary s;
+  s.frames = v.index;
+  s.seconds = v.time;
+  s.p50_frame_ms = view::percentile(v.frame_ms, 0.5);
+  s.p99_frame_ms = view::percentile(v.frame_ms, 0.99);
+  s.complete =
+      v.report && v.report->complete && v.threshold <= v.scene_options.selection.pixel_error;
+  s.path_finished = v.controller->mode() == view::ControlMode::playback && v.controller->finished();
+  s.frames_list = v.frames;
+  s.recorded = v.recorded;
+  s.screenshots = v.screenshots;
+  return s;
+}
+
+view::Controller& Viewer::controller() {
+  return *impl_->controller;
+}
+
+void Viewer::set_controller(std::unique_ptr<view::Controller> controller) {
+  impl_->controller = std::move(controller);
+}
+
+view::Scene& Viewer::scene() {
+  return *impl_->scene;
+}
+
+bool Viewer::panels_visible() const {
+  return impl_->panels;
+}
+
+bool Viewer::recording() const {
+  return impl_->recording;
+}
+
+Status Viewer::screenshot(const std::string& path) {
+  return impl_->write_screenshot(path);
+}
+
+}  // namespace relief::window

@@ -1,0 +1,103 @@
+#pragma once
+// The viewer's state, shared by its loop (viewer.cpp) and its panels
+// (panels.cpp).
+#include <deque>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "relief/view/ground.h"
+#include "relief/window/viewer.h"
+
+namespace relief::window {
+
+// Tiles loaded since the loader was last idle against those still to load:
+// the load progress bar.
+struct LoadProgress {
+  uint64_t base = 0;  // loaded + failed when the loader was last idle
+  uint64_t done = 0, pending = 0;
+  void update(const stream::LoaderStats& s) {
+    pending = uint64_t{s.queued} + s.in_flight;
+    if (pending == 0) base = s.loaded + s.failed;
+    done = s.loaded + s.failed - base;
+  }
+  float fraction() const {
+    return pending == 0 ? 1.0f : static_cast<float>(done) / static_cast<float>(done + pending);
+  }
+};
+
+// Loads per second over about the last second.
+struct LoadRate {
+  double time = -1;
+  uint64_t loaded = 0, failed = 0;
+  double loads_per_s = 0, failures_per_s = 0;
+  void update(double now, const stream::LoaderStats& s) {
+    if (time < 0) {
+      time = now, loaded = s.loaded, failed = s.failed;
+    } else if (now - time >= 1) {
+      loads_per_s = static_cast<double>(s.loaded - loaded) / (now - time);
+      failures_per_s = static_cast<double>(s.failed - failed) / (now - time);
+      time = now, loaded = s.loaded, failed = s.failed;
+    }
+  }
+};
+
+struct Viewer::Impl {
+  Impl(Window& w, const tiles::Store& e, const tiles::Store* i, const view::SceneOptions& so,
+       const ViewerOptions& o, const Clock& c)
+      : window(w),
+        elevation(e),
+        imagery(i),
+        scene_options(so),
+        options(o),
+        clock(c),
+        speed_lod(o.speed_lod) {}
+
+  Window& window;
+  const tiles::Store& elevation;
+  const tiles::Store* imagery;
+  view::SceneOptions scene_options;  // pixel_error: the still threshold
+  ViewerOptions options;
+  const Clock& clock;
+
+  std::unique_ptr<view::Scene> scene;
+  bool imagery_on = true, imagery_wanted = true;  // the panel sets wanted; the next frame acts
+  std::unique_ptr<view::Controller> controller;
+  view::SpeedLod speed_lod;
+  double threshold = 1;  // this frame's pixel error
+
+  std::optional<Clock::TimePoint> start, last;
+  double time = 0;
+  std::optional<double> path_end;  // when playback reached the end
+  bool quit = false;
+
+  bool recording = false, record_cut = false;
+  std::vector<lod::Keyframe> recorded;
+
+  size_t index = 0;
+  std::optional<view::FrameReport> report;  // the last frame's
+  std::vector<double> frame_ms;             // every frame's but the first
+  std::deque<double> recent_ms;             // the panels' window
+  std::vector<ViewerFrame> frames;
+  std::vector<std::string> screenshots;
+  bool panels = true;
+
+  double cursor_x = -1, cursor_y = -1;
+  std::optional<view::Pick> pick;
+  LoadProgress progress;
+  LoadRate elevation_rate, imagery_rate;
+
+  Status make_scene();
+  void on_input(const view::InputEvent& e);
+  void on_window_key(view::Key key);
+  void record(const lod::Camera& camera);
+  void take_screenshot();  // F12: the next free relief_NNNN.png in screenshot_dir
+  Status write_screenshot(const std::string& path);
+};
+
+// Dear ImGui panels: layers, level of detail, caches, frame statistics,
+// cursor read-out and load progress.
+void draw_panels(Viewer::Impl& v);
+
+}  // namespace relief::window

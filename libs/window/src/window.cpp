@@ -1,0 +1,304 @@
+#include "relief/window/window.h"
+
+#include <algorithm>
+#include <cassert>
+#include <string>
+
+#define GL_GLEXT_PROTOTYPES 1
+#include <GL/glcorearb.h>
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>
+#include <backends/imgui_impl_glfw.h>
+#include <backends/imgui_impl_opengl3.h>
+#include <fmt/format.h>
+#include <imgui.h>
+
+#include "glfw_input.h"
+
+namespace relief::window {
+
+namespace {
+
+// GLFW reports errors through a callback; the last one explains a failure.
+std::string g_last_error;
+bool g_open = false;  // GLFW is initialised once per process at a time
+
+void on_glfw_error(int, const char* description) {
+  g_last_error = description;
+}
+
+// The window's frames: an offscreen target recreated at each size, behind a
+// RenderTarget whose address stays the same for the window's life.
+class ResizableTarget final : public render::RenderTarget {
+ public:
+  Status resize(int width, int height) {
+    if (inner_ && inner_->width() == width && inner_->height() == height) return {};
+    inner_.reset();
+    inner_ = RELIEF_TRY(render::make_offscreen_target(width, height));
+    return {};
+  }
+  int width() const override { return inner_->width(); }
+  int height() const override { return inner_->height(); }
+  void bind() override { inner_->bind(); }
+  Result<std::vector<uint8_t>> read_rgba() override { return inner_->read_rgba(); }
+
+ private:
+  std::unique_ptr<render::RenderTarget> inner_;
+};
+
+}  // namespace
+
+struct Window::Impl {
+  Window* owner = nullptr;
+  GLFWwindow* window = nullptr;
+  ResizableTarget target;
+  InputHandler handler;
+  bool vsync = true, imgui = false, fullscreen = false, keep_screen = false;
+  std::vector<uint8_t> screen;
+  int windowed_x = 0, windowed_y = 0, windowed_width = 0, windowed_height = 0;
+
+  ~Impl() {
+    if (imgui) {
+      ImGui_ImplOpenGL3_Shutdown();
+      ImGui_ImplGlfw_Shutdown();
+      ImGui::DestroyContext();
+    }
+    if (window) {
+      glfwMakeContextCurrent(window);
+      target = ResizableTarget{};  // GL objects go while the context lives
+      glfwDestroyWindow(window);
+    }
+    glfwTerminate();
+    g_open = false;
+  }
+};
+
+namespace {
+
+Window& owner(GLFWwindow* w) {
+  return *static_cast<Window::Impl*>(glfwGetWindowUserPointer(w))->owner;
+}
+
+void on_key(GLFWwindow* w, int key, int scancode, int action, int mods) {
+  ImGui_ImplGlfw_KeyCallback(w, key, scancode, action, mods);
+  const view::Key k = key_from_glfw(key);
+  // Typing into a panel's field is not a command; function keys always are.
+  const bool function_key = k >= view::Key::f1 && k <= view::Key::f12;
+  if (action == GLFW_REPEAT || (ImGui::GetIO().WantCaptureKeyboard && !function_key)) return;
+  view::InputEvent e;
+  e.type = action == GLFW_PRESS ? view::InputEvent::Type::key_down : view::InputEvent::Type::key_up;
+  e.key = k;
+  e.modifiers = modifiers_from_glfw(mods);
+  owner(w).deliver(e);
+}
+
+void on_char(GLFWwindow* w, unsigned int c) {
+  ImGui_ImplGlfw_CharCallback(w, c);
+}
+
+void on_mouse_button(GLFWwindow* w, int button, int action, int mods) {
+  ImGui_ImplGlfw_MouseButtonCallback(w, button, action, mods);
+  // A press on a panel is the panel's; a release always goes through, so a
+  // drag that ends over a panel still ends.
+  if (action == GLFW_PRESS && ImGui::GetIO().WantCaptureMouse) return;
+  view::InputEvent e;
+  e.type =
+      action == GLFW_PRESS ? view::InputEvent::Type::mouse_down : view::InputEvent::Type::mouse_up;
+  e.button = button_from_glfw(button);
+  e.modifiers = modifiers_from_glfw(mods);
+  glfwGetCursorPos(w, &e.x, &e.y);
+  owner(w).deliver(e);
+}
+
+void on_cursor(GLFWwindow* w, double x, double y) {
+  view::InputEvent e;
+  e.type = view::InputEvent::Type::cursor;
+  e.x = x, e.y = y;
+  owner(w).deliver(e);
+}
+
+void on_scroll(GLFWwindow* w, double x, double y) {
+  ImGui_ImplGlfw_ScrollCallback(w, x, y);
+  if (ImGui::GetIO().WantCaptureMouse) return;
+  view::InputEvent e;
+  e.type = view::InputEvent::Type::scroll;
+  e.x = x, e.y = y;
+  owner(w).deliver(e);
+}
+
+// The default framebuffer's back buffer (before the swap makes it undefined).
+void read_back_buffer(int width, int height, std::vector<uint8_t>& out) {
+  std::vector<uint8_t> bottom_up(static_cast<size_t>(width) * height * 4);
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, 0);
+  glReadBuffer(GL_BACK);
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  glReadPixels(0, 0, width, height, GL_RGBA, GL_UNSIGNED_BYTE, bottom_up.data());
+  out.resize(bottom_up.size());
+  const size_t row = static_cast<size_t>(width) * 4;
+  for (int y = 0; y < height; ++y) {
+    std::copy_n(&bottom_up[static_cast<size_t>(height - 1 - y) * row], row,
+                &out[static_cast<size_t>(y) * row]);
+  }
+}
+
+void on_framebuffer_size(GLFWwindow* w, int width, int height) {
+  view::InputEvent e;
+  e.type = view::InputEvent::Type::resize;
+  e.x = width, e.y = height;
+  owner(w).deliver(e);
+}
+
+}  // namespace
+
+Result<std::unique_ptr<Window>> Window::create(const WindowOptions& options) {
+  assert(!g_open && "one Window at a time");
+  glfwSetErrorCallback(on_glfw_error);
+  g_last_error.clear();
+  if (!glfwInit()) {
+    return fail(fmt::format(
+        "view: cannot open a window ({}); without a display, `relief render` draws stills and "
+        "camera paths headless",
+        g_last_error.empty() ? "no display" : g_last_error));
+  }
+  g_open = true;
+  auto impl = std::make_unique<Impl>();
+  glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 4);
+  glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 5);
+  glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
+  glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
+  // Frames are drawn offscreen with their own depth buffer; the screen's
+  // framebuffer only receives the copy and the panels.
+  glfwWindowHint(GLFW_DEPTH_BITS, 0);
+  impl->window =
+      glfwCreateWindow(options.width, options.height, options.title.c_str(), nullptr, nullptr);
+  if (!impl->window) {
+    return fail(fmt::format("view: cannot open a {}x{} window with a GL 4.5 core context ({})",
+                            options.width, options.height, g_last_error));
+  }
+  glfwMakeContextCurrent(impl->window);
+  glfwSetWindowUserPointer(impl->window, impl.get());
+  int width = 0, height = 0;
+  glfwGetFramebufferSize(impl->window, &width, &height);
+  RELIEF_CHECK(impl->target.resize(std::max(width, 1), std::max(height, 1)));
+
+  IMGUI_CHECKVERSION();
+  ImGui::CreateContext();
+  ImGui::GetIO().IniFilename = nullptr;  // no imgui.ini left in the working directory
+  ImGui::StyleColorsDark();
+  // Our callbacks forward to ImGui's, then decide what reaches the handler.
+  ImGui_ImplGlfw_InitForOpenGL(impl->window, false);
+  ImGui_ImplOpenGL3_Init("#version 450");
+  impl->imgui = true;
+  glfwSetKeyCallback(impl->window, on_key);
+  glfwSetCharCallback(impl->window, on_char);
+  glfwSetMouseButtonCallback(impl->window, on_mouse_button);
+  glfwSetCursorPosCallback(impl->window, on_cursor);
+  glfwSetScrollCallback(impl->window, on_scroll);
+  glfwSetFramebufferSizeCallback(impl->window, on_framebuffer_size);
+
+  std::unique_ptr<Window> w(new Window(std::move(impl)));
+  w->impl_->owner = w.get();
+  w->set_vsync(options.vsync);
+  return w;
+}
+
+Window::Window(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+Window::~Window() = default;
+
+render::RenderTarget& Window::target() {
+  return impl_->target;
+}
+
+void Window::set_input_handler(InputHandler handler) {
+  impl_->handler = std::move(handler);
+}
+
+void Window::deliver(const view::InputEvent& event) {
+  if (event.type == view::InputEvent::Type::resize && event.x >= 1 && event.y >= 1) {
+    // A failed resize keeps the previous size: the frame is scaled to the window.
+    (void)impl_->target.resize(static_cast<int>(event.x), static_cast<int>(event.y));
+  }
+  if (impl_->handler) impl_->handler(event);
+}
+
+void Window::poll_events() {
+  glfwPollEvents();
+}
+
+bool Window::should_close() const {
+  return glfwWindowShouldClose(impl_->window);
+}
+
+void Window::request_close() {
+  glfwSetWindowShouldClose(impl_->window, GLFW_TRUE);
+}
+
+void Window::present(const std::function<void()>& ui) {
+  int width = 0, height = 0;
+  glfwGetFramebufferSize(impl_->window, &width, &height);
+  impl_->target.bind();  // the read framebuffer of the copy
+  glBindFramebuffer(GL_DRAW_FRAMEBUFFER, 0);
+  glBlitFramebuffer(0, 0, impl_->target.width(), impl_->target.height(), 0, 0, width, height,
+                    GL_COLOR_BUFFER_BIT, GL_NEAREST);
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  glViewport(0, 0, width, height);
+  if (ui) {
+    ImGui_ImplOpenGL3_NewFrame();
+    ImGui_ImplGlfw_NewFrame();
+    ImGui::NewFrame();
+    ui();
+    ImGui::Render();
+    ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+  }
+  if (impl_->keep_screen) read_back_buffer(width, height, impl_->screen);
+  glfwSwapBuffers(impl_->window);
+}
+
+void Window::set_keep_screen(bool on) {
+  impl_->keep_screen = on;
+  if (!on) impl_->screen.clear();
+}
+
+const std::vector<uint8_t>& Window::screen() const {
+  return impl_->screen;
+}
+
+void Window::set_vsync(bool on) {
+  impl_->vsync = on;
+  glfwSwapInterval(on ? 1 : 0);
+}
+
+bool Window::vsync() const {
+  return impl_->vsync;
+}
+
+void Window::toggle_fullscreen() {
+  Impl& m = *impl_;
+  if (!m.fullscreen) {
+    GLFWmonitor* monitor = glfwGetPrimaryMonitor();
+    const GLFWvidmode* mode = monitor ? glfwGetVideoMode(monitor) : nullptr;
+    if (!mode) return;
+    glfwGetWindowPos(m.window, &m.windowed_x, &m.windowed_y);
+    glfwGetWindowSize(m.window, &m.windowed_width, &m.windowed_height);
+    glfwSetWindowMonitor(m.window, monitor, 0, 0, mode->width, mode->height, mode->refreshRate);
+  } else {
+    glfwSetWindowMonitor(m.window, nullptr, m.windowed_x, m.windowed_y, m.windowed_width,
+                         m.windowed_height, 0);
+  }
+  m.fullscreen = !m.fullscreen;
+  set_vsync(m.vsync);  // some systems reset the swap interval with the mode
+}
+
+bool Window::fullscreen() const {
+  return impl_->fullscreen;
+}
+
+std::string Window::renderer() const {
+  auto text = [](GLenum name) {
+    const auto* s = reinterpret_cast<const char*>(glGetString(name));
+    return std::string(s ? s : "?");
+  };
+  return text(GL_RENDERER) + ", " + text(GL_VERSION);
+}
+
+}  // namespace relief::window

@@ -1,0 +1,380 @@
+// The viewer's window under Xvfb (the CTest runs this binary through
+// xvfb-run): it opens and draws; input delivered the way GLFW's callbacks
+// deliver it reaches the controller, except the keys the viewer keeps; a
+// window frame equals the headless still of its camera; scripted sessions
+// (--play --exit-when-done --stats, --record) run without input; bad input is
+// a one-line error.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <thread>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "../ingest/built_stores.h"
+#include "../support/images.h"
+#include "../support/test_support.h"
+#include "relief/base/manual_clock.h"
+#include "relief/window/viewer.h"
+#include "relief/window/window.h"
+
+namespace relief::window {
+namespace {
+
+using namespace std::chrono_literals;
+using nlohmann::json;
+using testing::kNoMesaLeakReport;
+using testing::run_relief;
+using testing::ScratchDir;
+using Type = view::InputEvent::Type;
+
+constexpr int kWidth = 320, kHeight = 240;
+// An oblique view over the Pyrenees, as --look-at values and as a camera.
+constexpr const char* kLookAt = "1.5,42.5,1500,30000,20,-35";
+const lod::Camera kCamera = lod::look_at(1.5, 42.5, 1500, 30000, 20, -35, 60, kWidth, kHeight);
+
+std::string store_path() {
+  return testing::pyrenees_store().root().string();
+}
+
+// A controller that notes what reaches it and passes it on.
+class NotingController final : public view::Controller {
+ public:
+  explicit NotingController(std::unique_ptr<view::Controller> inner) : inner_(std::move(inner)) {}
+  view::ControlMode mode() const override { return inner_->mode(); }
+  void push(const view::InputEvent& e) override {
+    pushed.push_back(e);
+    inner_->push(e);
+  }
+  const lod::Camera& update(double dt, const view::Ground& ground) override {
+    updates.push_back({dt, pushed.size()});
+    return inner_->update(dt, ground);
+  }
+  const lod::Camera& camera() const override { return inner_->camera(); }
+  void set_camera(const lod::Camera& c) override { inner_->set_camera(c); }
+  double linear_speed() const override { return inner_->linear_speed(); }
+  double angular_speed() const override { return inner_->angular_speed(); }
+
+  std::vector<view::InputEvent> pushed;
+  std::vector<std::pair<double, size_t>> updates;  // dt, events pushed before the update
+
+ private:
+  std::unique_ptr<view::Controller> inner_;
+};
+
+class WindowTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    WindowOptions o;
+    o.width = kWidth, o.height = kHeight, o.vsync = false;
+    auto w = Window::create(o);
+    ASSERT_TRUE(w) << w.error().message;
+    window_ = std::move(*w);
+  }
+
+  std::unique_ptr<Viewer> viewer(const ViewerOptions& o, const Clock& clock) {
+    view::SceneOptions so;
+    so.mesh_level = 3;
+    auto v = Viewer::create(*window_, testing::pyrenees_store(), nullptr, so, o, clock);
+    EXPECT_TRUE(v) << v.error().message;
+    return v ? std::move(*v) : nullptr;
+  }
+
+  std::unique_ptr<Window> window_;
+};
+
+TEST_F(WindowTest, OpensAndDrawsTheTerrainUntilTheViewIsComplete) {
+  EXPECT_EQ(window_->target().width(), kWidth);
+  EXPECT_EQ(window_->target().height(), kHeight);
+  ViewerOptions o;
+  o.start = kCamera;
+  o.exit_when_done = true;
+  o.until_complete = 120;
+  auto v = viewer(o, steady_clock());
+  ASSERT_TRUE(v);
+  auto summary = v->run();
+  ASSERT_TRUE(summary) << summary.error().message;
+  EXPECT_TRUE(summary->complete);
+  EXPECT_GE(summary->frames, 1u);
+  auto pixels = window_->target().read_rgba();
+  ASSERT_TRUE(pixels);
+  const testing::Image image{kWidth, kHeight, *pixels};
+  const uint8_t* sky = image.rgba.data();  // the top left corner shows the sky
+  const auto sky_pixels = testing::count_colour(image, sky[0], sky[1], sky[2]);
+  EXPECT_LT(sky_pixels, size_t{kWidth} * kHeight / 2) << "the terrain fills the lower half";
+}
+
+TEST_F(WindowTest, DeliveredInputReachesTheControllerAtTheNextFrame) {
+  ManualClock clock;
+  ViewerOptions o;
+  o.start = kCamera;
+  auto v = viewer(o, clock);
+  ASSERT_TRUE(v);
+  auto noting =
+      std::make_unique<NotingController>(view::make_controller(view::ControlMode::orbit, kCamera));
+  NotingController& c = *noting;
+  v->set_controller(std::move(noting));
+
+  auto key = [](Type t, view::Key k) {
+    view::InputEvent e;
+    e.type = t, e.key = k;
+    return e;
+  };
+  view::InputEvent cursor;
+  cursor.type = Type::cursor, cursor.x = 100, cursor.y = 80;
+  view::InputEvent scroll;
+  scroll.type = Type::scroll, scroll.y = -2;
+  // The same entry point GLFW's callbacks use.
+  window_->deliver(key(Type::key_down, view::Key::w));
+  window_->deliver(cursor);
+  window_->deliver(scroll);
+  window_->deliver(key(Type::key_down, view::Key::tab));  // the viewer's: panels off
+  window_->deliver(key(Type::key_up, view::Key::tab));
+  window_->deliver(key(Type::key_up, view::Key::w));
+  clock.advance(50ms);
+  ASSERT_TRUE(v->frame());
+  clock.advance(50ms);
+  ASSERT_TRUE(v->frame());
+
+  ASSERT_EQ(c.pushed.size(), 4u);
+  EXPECT_EQ(c.pushed[0].type, Type::key_down);
+  EXPECT_EQ(c.pushed[0].key, view::Key::w);
+  EXPECT_EQ(c.pushed[1].type, Type::cursor);
+  EXPECT_EQ(c.pushed[1].x, 100);
+  EXPECT_EQ(c.pushed[2].type, Type::scroll);
+  EXPECT_EQ(c.pushed[2].y, -2);
+  EXPECT_EQ(c.pushed[3].type, Type::key_up);
+  EXPECT_FALSE(v->panels_visible());
+  // Both frames updated the controller, the first after every event, with
+  // the clock's time since the previous frame.
+  ASSERT_EQ(c.updates.size(), 2u);
+  EXPECT_EQ(c.updates[0], std::make_pair(0.0, size_t{4}));
+  EXPECT_DOUBLE_EQ(c.updates[1].first, 0.05);
+
+  // A resize reaches the controller and resizes the frames.
+  view::InputEvent resize;
+  resize.type = Type::resize, resize.x = 200, resize.y = 100;
+  window_->deliver(resize);
+  EXPECT_EQ(window_->target().width(), 200);
+  EXPECT_EQ(window_->target().height(), 100);
+  ASSERT_EQ(c.pushed.size(), 5u);
+  EXPECT_EQ(c.pushed[4].type, Type::resize);
+}
+
+TEST_F(WindowTest, TheViewerKeysScreenshotRecordSwitchVsyncAndFullscreenAndQuit) {
+  ScratchDir dir("window_keys");
+  ManualClock clock;
+  ViewerOptions o;
+  o.start = kCamera;
+  o.screenshot_dir = dir.path().string();
+  auto v = viewer(o, clock);
+  ASSERT_TRUE(v);
+  view::InputEvent e;
+  e.type = Type::key_down;
+  e.key = view::Key::f9;  // recording on
+  window_->deliver(e);
+  EXPECT_TRUE(v->recording());
+  for (int i = 0; i < 3; ++i) {
+    ASSERT_TRUE(v->frame());
+    clock.advance(100ms);
+  }
+  e.key = view::Key::f12;
+  window_->deliver(e);
+  window_->deliver(e);
+  const ViewerSummary s = v->summary();
+  ASSERT_EQ(s.screenshots.size(), 2u);
+  EXPECT_EQ(s.screenshots[0], (dir / "relief_0000.png").string());
+  EXPECT_EQ(s.screenshots[1], (dir / "relief_0001.png").string());
+  const testing::Image shot = testing::read_png(s.screenshots[1], kWidth, kHeight);
+  EXPECT_EQ(shot.width, kWidth);
+  ASSERT_EQ(s.recorded.size(), 3u);
+  EXPECT_DOUBLE_EQ(s.recorded[2].time, 0.2);
+  EXPECT_EQ(s.recorded[2].camera.lon, kCamera.lon);
+
+  const bool vsync = window_->vsync();
+  e.key = view::Key::f8;
+  window_->deliver(e);
+  EXPECT_NE(window_->vsync(), vsync);
+  // Fullscreen on the X server's screen, and back; frames follow the size.
+  e.key = view::Key::f11;
+  window_->deliver(e);
+  EXPECT_TRUE(window_->fullscreen());
+  // The X server answers asynchronously: a few frames at most.
+  auto frames_until_width = [&](int width) {
+    for (int i = 0; i < 50 && window_->target().width() != width; ++i) {
+      ASSERT_TRUE(v->frame());
+      std::this_thread::sleep_for(10ms);
+    }
+  };
+  frames_until_width(1280);
+  EXPECT_EQ(window_->target().width(), 1280);
+  EXPECT_EQ(window_->target().height(), 1024);
+  window_->deliver(e);
+  EXPECT_FALSE(window_->fullscreen());
+  frames_until_width(kWidth);
+  EXPECT_EQ(window_->target().width(), kWidth);
+  EXPECT_EQ(window_->target().height(), kHeight);
+
+  e.key = view::Key::escape;
+  window_->deliver(e);
+  EXPECT_FALSE(*v->frame());
+}
+
+size_t differing_pixels(const std::vector<uint8_t>& a, const std::vector<uint8_t>& b) {
+  size_t n = 0;
+  for (size_t i = 0; i + 3 < std::min(a.size(), b.size()); i += 4) {
+    n += !std::equal(&a[i], &a[i + 3], &b[i]);
+  }
+  return n;
+}
+
+TEST_F(WindowTest, PanelsAreDrawnOverTheFrameButNotInScreenshots) {
+  ManualClock clock;
+  ViewerOptions o;
+  o.start = kCamera;
+  auto v = viewer(o, clock);
+  ASSERT_TRUE(v);
+  window_->set_keep_screen(true);
+  ASSERT_TRUE(v->frame());  // Dear ImGui sizes auto-resized panels in their first frame
+  clock.advance(100ms);
+  ASSERT_TRUE(v->frame());
+  auto frame = window_->target().read_rgba();
+  const std::vector<uint8_t>* screen = &window_->screen();
+  ASSERT_TRUE(frame);
+  ASSERT_EQ(screen->size(), frame->size());
+  EXPECT_GT(differing_pixels(*frame, *screen), size_t{1000})
+      << "the panels cover part of the frame";
+
+  view::InputEvent tab;
+  tab.type = Type::key_down, tab.key = view::Key::tab;
+  window_->deliver(tab);
+  clock.advance(100ms);
+  ASSERT_TRUE(v->frame());
+  frame = window_->target().read_rgba();
+  ASSERT_TRUE(frame);
+  EXPECT_EQ(differing_pixels(*frame, *screen), 0u) << "without panels the screen is the frame";
+}
+
+// ---- the command line -------------------------------------------------------
+
+double max_channel_difference(const testing::Image& a, const testing::Image& b, double* mean) {
+  double worst = 0, sum = 0;
+  for (size_t i = 0; i < a.rgba.size(); ++i) {
+    const double d = std::abs(int{a.rgba[i]} - int{b.rgba[i]});
+    worst = std::max(worst, d);
+    sum += d;
+  }
+  *mean = sum / static_cast<double>(a.rgba.size());
+  return worst;
+}
+
+TEST(ViewCommand, AWindowFrameEqualsTheHeadlessStillOfItsCamera) {
+  ScratchDir dir("view_still");
+  const std::string size = fmt::format("{}x{}", kWidth, kHeight);
+  const auto still = dir / "still.png", shot = dir / "shot.png";
+  auto r = run_relief(
+      {"render", store_path(), "--look-at", kLookAt, "--size", size, "-o", still.string()},
+      kNoMesaLeakReport);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = run_relief({"view", store_path(), "--look-at", kLookAt, "--size", size, "--exit-when-done",
+                  "--no-vsync", "--screenshot", shot.string()},
+                 kNoMesaLeakReport);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("last frame complete"), std::string::npos) << r.out;
+  const testing::Image a = testing::read_png(still, kWidth, kHeight);
+  const testing::Image b = testing::read_png(shot, kWidth, kHeight);
+  // The same renderer into the same framebuffer formats; only the GL
+  // context differs (GLX in the window, EGL headless): within 2 of 255 per
+  // channel.
+  double mean = 0;
+  EXPECT_LE(max_channel_difference(a, b, &mean), 2) << "mean " << mean;
+  EXPECT_LT(mean, 0.05);
+}
+
+void write_path(const std::filesystem::path& file) {
+  std::ofstream(file) << R"({"fps": 30, "keyframes": [
+    {"time": 0, "camera": [1.40, 42.40, 6000, 20, -35, 0]},
+    {"time": 0.6, "camera": [1.45, 42.45, 5000, 30, -30, 0]}]})";
+}
+
+json read_json(const std::filesystem::path& file) {
+  std::ifstream in(file);
+  return json::parse(in);
+}
+
+TEST(ViewCommand, PlaysAPathWithoutInputAndWritesTheStatisticsOfEveryFrame) {
+  ScratchDir dir("view_play");
+  const auto path = dir / "path.json", stats = dir / "stats.json";
+  write_path(path);
+  auto r = run_relief({"view", store_path(), "--play", path.string(), "--exit-when-done", "--stats",
+                       stats.string(), "--size", "160x120", "--no-vsync"},
+                      kNoMesaLeakReport);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json s = read_json(stats);
+  const json& frames = s["frames"];
+  ASSERT_GE(frames.size(), 2u);
+  EXPECT_EQ(s["summary"]["frames"], frames.size());
+  EXPECT_TRUE(s["summary"]["path_finished"]);
+  EXPECT_TRUE(s["summary"]["complete"]);
+  EXPECT_GT(s["summary"]["fps_p50"].get<double>(), 0);
+  EXPECT_EQ(frames[0]["camera"][0], 1.40);
+  EXPECT_EQ(frames.back()["camera"][0], 1.45) << "the last frames show the path's end";
+  EXPECT_GE(frames.back()["time"].get<double>(), 0.6);
+  for (const json& f : frames) {
+    EXPECT_TRUE(f.contains("triangles_per_pixel"));
+    EXPECT_TRUE(f.contains("uploaded_bytes"));
+  }
+  EXPECT_GT(frames.back()["triangles"].get<uint64_t>(), 0u);
+}
+
+TEST(ViewCommand, ARecordedSessionPlaysBackThroughTheSameCameras) {
+  ScratchDir dir("view_record");
+  const auto path = dir / "path.json", recorded = dir / "recorded.json", stats = dir / "stats.json";
+  write_path(path);
+  auto r = run_relief({"view", store_path(), "--play", path.string(), "--exit-when-done",
+                       "--record", recorded.string(), "--size", "160x120", "--no-vsync"},
+                      kNoMesaLeakReport);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json rec = read_json(recorded);
+  const json& keys = rec["keyframes"];
+  ASSERT_GE(keys.size(), 2u);
+  EXPECT_EQ(rec["fps"], 30);
+  EXPECT_EQ(keys[0]["camera"][0], 1.40);
+  r = run_relief({"view", store_path(), "--play", recorded.string(), "--exit-when-done", "--stats",
+                  stats.string(), "--size", "160x120", "--no-vsync"},
+                 kNoMesaLeakReport);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json frames = read_json(stats)["frames"];
+  ASSERT_GE(frames.size(), 2u);
+  for (int i = 0; i < 6; ++i) {  // the first and the last camera, exactly
+    EXPECT_EQ(frames[0]["camera"][i], keys[0]["camera"][i]);
+    EXPECT_EQ(frames.back()["camera"][i], keys.back()["camera"][i]);
+  }
+}
+
+TEST(ViewCommand, BadInputIsAOneLineError) {
+  ScratchDir dir("view_bad");
+  const std::string store = store_path();
+  auto expect_error = [](const testing::RunResult& r, const std::string& needle) {
+    EXPECT_TRUE(testing::is_one_line_error(r, needle)) << r.exit_code << ": " << r.err;
+  };
+  // No display: points to the headless renderer.
+  expect_error(run_relief({"view", store}, "env -u DISPLAY "), "relief render");
+  expect_error(run_relief({"view", store, "--record", (dir / "missing" / "r.json").string()}),
+               "--record");
+  expect_error(run_relief({"view", store, "--stats", (dir / "missing" / "s.json").string()}),
+               "--stats");
+  const auto not_json = dir / "path.json";
+  std::ofstream(not_json) << "fps: 30";
+  expect_error(run_relief({"view", store, "--play", not_json.string()}), not_json.string());
+  expect_error(run_relief({"view", store, "--mode", "glider"}), "--mode");
+  expect_error(run_relief({"view", store, "--play", not_json.string(), "--mode", "walk"}),
+               "--play");
+  EXPECT_FALSE(std::filesystem::exists(dir / "missing"));
+}
+
+}  // namespace
+}  // namespace relief::window
