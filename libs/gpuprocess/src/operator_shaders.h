@@ -1,0 +1,35 @@
+#pragma once
+// The GLSL of every operator that runs on the GPU, and the constants each
+// step passes to it. Every shader mirrors its libs/process kernel: the same
+// formula, evaluated in double precision in the same order (window sums
+// column by column, exactly as window_stats.cpp and gauss_stack.cpp add
+// them), so results differ from the CPU's only where the GPU's double
+// exp/log (shader_math below) round differently.
+#include <array>
+#include <string>
+#include <vector>
+
+#include "relief/gpuprocess/chain.h"
+#include "relief/process/dynamic_range.h"
+
+namespace relief::gpuprocess {
+
+// Sizes of the uniform arrays every operator shader declares.
+inline constexpr int kConstants = 8;
+inline constexpr int kWeights = 128;
+
+// The complete compute shader of operator `name`, or empty when the operator
+// has no GPU implementation.
+std::string operator_shader(const std::string& name);
+
+// The uniforms of one step: `r` (radius, or the largest radius of a Gauss
+// stack), `k` (derived constants, computed on the CPU in double as the CPU
+// kernel does) and `w` (kernel weights).
+struct StepUniforms {
+  int r = 0;
+  std::array<double, kConstants> k{};
+  std::vector<double> w;
+};
+StepUniforms step_uniforms(const ChainStep& step, const process::GlobalStats& stats);
+
+}  // namespace relief::gpuprocess
