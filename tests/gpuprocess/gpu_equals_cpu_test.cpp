@@ -71,5 +71,17 @@ INSTANTIATE_TEST_SUITE_P(LocalMappings, GpuEqualsCpu,
                                                 {"max_radius=6", "b=1", "c=0.3", "d=0.9"}}),
                          case_name);
 
+// The classic local tone mappers on the same Gauss stack.
+INSTANTIATE_TEST_SUITE_P(
+    ClassicLocalMappings, GpuEqualsCpu,
+    ::testing::Values(Case{"chiu", {"radius=5"}}, Case{"chiu", {"c=0.5", "radius=2"}},
+                      Case{"retinex", {"max_radius=8"}},
+                      Case{"retinex", {"max_radius=5", "p=1000", "w=2", "range=1"}},
+                      Case{"ashikhmin", {"max_radius=6"}},
+                      Case{"ashikhmin", {"max_radius=8", "c=1000", "t=0.2"}},
+                      Case{"reinhard", {"max_radius=6"}},
+                      Case{"reinhard", {"max_radius=8", "c=2", "w=5", "s=4", "t=0.1"}}),
+    case_name);
+
 }  // namespace
 }  // namespace relief::testing

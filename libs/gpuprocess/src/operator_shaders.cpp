@@ -254,10 +254,10 @@ float apply(ivec2 p) {
 }
 )";
 
-// The Gauss stack G_1 .. G_r (gauss_stack.cpp) and the SAR adaptation value
-// (tone_mapping_local.cpp sar_adaptation); the weights of radius q start at
-// w[q * q - 1].
-constexpr const char* kAdaptation = R"(
+// The Gauss stack G_1 .. G_r (gauss_stack.cpp) and what the local mappings
+// of tone_mapping_local.cpp build on it; the weights of radius q start at
+// w[q * q - 1]. Every local mapping defines local_map(p, a), a the input.
+constexpr const char* kGaussStack = R"(
 double gauss_level(ivec2 p, int q) {
   int o = q * q - 1;
   precise double s = 0.0LF, ws = 0.0LF;
@@ -274,18 +274,19 @@ double gauss_level(ivec2 p, int q) {
   }
   return ws > 0.0LF ? s / ws : double(nan_f());
 }
-bool quotient_exceeds(double g_r, double g_next, double t) {
-  if (g_r > 0.0LF) return abs(g_r - g_next) / g_r > t;
-  return g_next > 0.0LF;  // an infinite quotient
+// |G_r - G_r+1| / G_r, infinite where G_r is zero but G_r+1 is not.
+double quotient(double g_r, double g_next) {
+  if (g_r > 0.0LF) return abs(g_r - g_next) / g_r;
+  return g_next > 0.0LF ? inf_d() : 0.0LF;
 }
-// a normalised; the adaptation value for threshold t and scale (1 / max).
+// The SAR adaptation value for normalised a, threshold t and scale 1 / max.
 double sar_adaptation(ivec2 p, double a, double t, double scale) {
   double adapted = a;
   if (r < 2) return adapted;
   double prev = gauss_level(p, 1) * scale;
   for (int q = 2; q <= r; ++q) {
     double next = gauss_level(p, q) * scale;
-    if (quotient_exceeds(prev, next, t)) adapted = next;
+    if (quotient(prev, next) > t) adapted = next;
     prev = next;
   }
   return adapted;
@@ -295,6 +296,16 @@ float apply(ivec2 p) {
   float v = at(p);
   if (nodata(v)) return v;
   return float(clamp01(local_map(p, double(v))));
+}
+)";
+
+// Ashikhmin's perceptual capacity (tone_mapping_local.cpp capacity).
+constexpr const char* kCapacity = R"(
+double capacity(double l) {
+  if (l < 0.0034LF) return l / 0.0014LF;
+  if (l < 1.0LF) return 2.4483LF + dlog10(l / 0.0034LF) / 0.4027LF;
+  if (l < 7.2444LF) return 16.5630LF + (l - 1.0LF) / 0.4027LF;
+  return 32.0693LF + dlog10(l / 7.2444LF) / 0.0556LF;
 }
 )";
 
@@ -331,7 +342,7 @@ const std::map<std::string, std::string>& bodies() {
       {"gauss", kGauss},
       {"median", kMedian},
       // Local mappings with the SAR adaptation value.
-      {"ext-schlick", std::string(kAdaptation) + R"(
+      {"ext-schlick", std::string(kGaussStack) + R"(
 double local_map(ivec2 p, double v) {
   double b = k[0], d = k[1], t = k[2], scale = k[3];
   double a = max(0.0LF, v) * scale;
@@ -339,7 +350,7 @@ double local_map(ivec2 p, double v) {
   return b * a / ((b - 1.0LF) * a_prime + 1.0LF);
 }
 )"},
-      {"ext-reinhard-devlin", std::string(kAdaptation) + R"(
+      {"ext-reinhard-devlin", std::string(kGaussStack) + R"(
 double local_map(ivec2 p, double v) {
   double m = k[0], f = k[1], c = k[2], avg = k[3], d = k[4], t = k[5], scale = k[6];
   double a = max(0.0LF, v) * scale;
@@ -347,6 +358,69 @@ double local_map(ivec2 p, double v) {
   double l = (1.0LF - c) * a_prime + c * avg;
   double sigma = dpow(f * l, m);
   return a + sigma > 0.0LF ? a / (a + sigma) : 0.0LF;
+}
+)"},
+      {"chiu", std::string(kGaussStack) + R"(
+double local_map(ivec2 p, double v) {
+  double c = k[0], scale = k[1];
+  double a = max(0.0LF, v) * scale;
+  double local = r == 0 ? a : gauss_level(p, r) * scale;
+  return local > 0.0LF ? a / (c * local) : 0.0LF;
+}
+)"},
+      {"retinex", std::string(kGaussStack) + R"(
+double local_map(ivec2 p, double v) {
+  double pre = k[0], wt = k[1], range = k[2], scale = k[6];
+  double a = max(0.0LF, v) * scale;
+  if (r == 0) return 0.5LF;
+  double weights[3] = double[3](1.0LF, wt, wt * wt);
+  double total = 1.0LF + wt + wt * wt;
+  double sum = 0.0LF;
+  for (int i = 0; i < 3; ++i) {
+    double g = gauss_level(p, int(k[3 + i])) * scale;
+    sum += weights[i] * (dlog1p(pre * a) - dlog1p(pre * g));
+  }
+  return 0.5LF + sum / total / (2.0LF * range);
+}
+)"},
+      {"ashikhmin", std::string(kGaussStack) + kCapacity + R"(
+double local_map(ivec2 p, double v) {
+  double c = k[0], t = k[1], c_lo = k[2], c_hi = k[3], scale = k[4];
+  double a = max(0.0LF, v) * scale;
+  double adapted = a;
+  if (r >= 1) {
+    double prev = gauss_level(p, 1) * scale;
+    adapted = prev;
+    for (int q = 2; q <= r; ++q) {
+      double next = gauss_level(p, q) * scale;
+      if (!(quotient(prev, next) < t)) break;
+      adapted = next;
+      prev = next;
+    }
+  }
+  if (!(adapted > 0.0LF)) return 0.0LF;
+  return (capacity(c * adapted) - c_lo) / (c_hi - c_lo) * a / adapted;
+}
+)"},
+      {"reinhard", std::string(kGaussStack) + R"(
+double local_map(ivec2 p, double v) {
+  double key = k[0], white = k[1], sharpen = k[2], t = k[3], scale = k[4];
+  double a = max(0.0LF, v) * scale;
+  double adapted = a;
+  if (r >= 1) {
+    double prev = gauss_level(p, 1) * scale;
+    adapted = prev;
+    for (int q = 2; q <= r; ++q) {
+      double next = gauss_level(p, q) * scale;
+      double s = double(q - 1);
+      double u = key * (prev - next) / (sharpen * key / (s * s) + key * prev);
+      if (abs(u) >= t) break;
+      adapted = next;
+      prev = next;
+    }
+  }
+  double l = key * a;
+  return l * (1.0LF + l / (white * white)) / (1.0LF + key * adapted);
 }
 )"},
   };
@@ -369,6 +443,12 @@ double auto_schlick_b(const process::GlobalStats& g) {
 double reinhard_devlin_exponent(const process::GlobalStats& g) {
   const double avg = g.mean / g.max, lo = std::max(0.0, g.min) / g.max;
   return 0.3 + 0.7 * std::pow((1 - avg) / (1 - lo), 1.4);
+}
+double capacity(double l) {
+  if (l < 0.0034) return l / 0.0014;
+  if (l < 1) return 2.4483 + std::log10(l / 0.0034) / 0.4027;
+  if (l < 7.2444) return 16.5630 + (l - 1) / 0.4027;
+  return 32.0693 + std::log10(l / 7.2444) / 0.0556;
 }
 double tumblin_gamma(double luminance) {
   return luminance > 100 ? 2.655 : 1.855 + 0.4 * std::log10(luminance + 2.3e-5);
@@ -427,8 +507,24 @@ StepUniforms step_uniforms(const ChainStep& step, const process::GlobalStats& g)
     } else {
       k[4] = p("d"), k[5] = p("t"), k[6] = 1 / g.max;
     }
+  } else if (name == "chiu") {
+    k[0] = p("c"), k[1] = 1 / g.max;
+  } else if (name == "retinex") {
+    const int big = u.r;
+    k[0] = p("p"), k[1] = p("w"), k[2] = p("range");
+    k[3] = std::max(1, big / 5), k[4] = std::max(1, big / 2), k[5] = big, k[6] = 1 / g.max;
+  } else if (name == "ashikhmin") {
+    k[0] = p("c"), k[1] = p("t");
+    k[2] = capacity(p("c") * std::max(0.0, g.min) / g.max), k[3] = capacity(p("c"));
+    k[4] = 1 / g.max;
+  } else if (name == "reinhard") {
+    const double mean = g.mean / g.max;
+    k[0] = std::isnan(p("c")) ? 0.18 / mean : p("c");
+    k[1] = std::isnan(p("w")) ? k[0] : p("w");
+    k[2] = std::pow(2.0, p("s")), k[3] = p("t"), k[4] = 1 / g.max;
   }
-  if (name == "ext-schlick" || name == "ext-reinhard-devlin") {
+  if (name == "ext-schlick" || name == "ext-reinhard-devlin" || name == "chiu" ||
+      name == "retinex" || name == "ashikhmin" || name == "reinhard") {
     for (int q = 1; q <= u.r; ++q) {
       const auto kernel = gauss_weights(q, q / 2.5);
       u.w.insert(u.w.end(), kernel.begin(), kernel.end());
