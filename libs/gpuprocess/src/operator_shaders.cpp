@@ -19,7 +19,7 @@ uniform ivec2 origin;  // first output texel
 uniform ivec2 extent;  // output texels
 uniform int r;
 uniform double k[8];
-uniform double w[128];
+uniform double w[361];
 
 float at(ivec2 p) { return texelFetch(src, p, 0).r; }
 // Bit tests: nodata survives whatever the compiler assumes about NaN.
@@ -309,6 +309,40 @@ double capacity(double l) {
 }
 )";
 
+// Durand-Dorsey (durand.cpp): a bilateral filter of log10 amplitudes. The
+// CPU tabulates the range weight at 4096 steps of |d| < 4 sigma_r; the shader
+// computes the same tabulated value (same index, same formula) on the fly.
+// w[] holds the (2r+1)^2 spatial weights row by row; k[0] = k, k[1] = 1 / max,
+// k[2] = sigma_r, k[3] = the table's step.
+constexpr const char* kDurand = R"(
+double log_amplitude(float v) { return dlog10(max(1e-6LF, double(v) * k[1])); }
+double range_weight(double d) {
+  double i = abs(d) / k[3] + 0.5LF;
+  if (!(i < 4096.0LF)) return 0.0LF;
+  double x = double(int(i)) * k[3];
+  return dexp(-0.5LF * x * x / (k[2] * k[2]));
+}
+float apply(ivec2 p) {
+  float v = at(p);
+  if (nodata(v)) return v;
+  double centre = log_amplitude(v);
+  precise double sum = 0.0LF, weight = 0.0LF;
+  int s = 0;
+  for (int dy = -r; dy <= r; ++dy) {
+    for (int dx = -r; dx <= r; ++dx, ++s) {
+      float u = at(p + ivec2(dx, dy));
+      if (nodata(u)) continue;
+      double l = log_amplitude(u);
+      double wt = w[s] * range_weight(l - centre);
+      sum += wt * l;
+      weight += wt;
+    }
+  }
+  double base = sum / weight;
+  return float(clamp01(dexp((k[0] * base + centre - base) * kLn10)));
+}
+)";
+
 const std::map<std::string, std::string>& bodies() {
   static const std::map<std::string, std::string> map = {
       // Conversions.
@@ -423,6 +457,7 @@ double local_map(ivec2 p, double v) {
   return l * (1.0LF + l / (white * white)) / (1.0LF + key * adapted);
 }
 )"},
+      {"durand", kDurand},
   };
   return map;
 }
@@ -506,6 +541,14 @@ StepUniforms step_uniforms(const ChainStep& step, const process::GlobalStats& g)
       k[4] = 1 / g.max;
     } else {
       k[4] = p("d"), k[5] = p("t"), k[6] = 1 / g.max;
+    }
+  } else if (name == "durand") {
+    const double sigma_s = u.r > 0 ? u.r / 2.5 : 1.0, sigma_r = p("sigma_r");
+    k[0] = p("k"), k[1] = 1 / g.max, k[2] = sigma_r, k[3] = 4 * sigma_r / (4096 - 1);
+    for (int dy = -u.r; dy <= u.r; ++dy) {
+      for (int dx = -u.r; dx <= u.r; ++dx) {
+        u.w.push_back(std::exp(-0.5 * (dx * dx + dy * dy) / (sigma_s * sigma_s)));
+      }
     }
   } else if (name == "chiu") {
     k[0] = p("c"), k[1] = 1 / g.max;

@@ -16,7 +16,7 @@ namespace relief::gpuprocess {
 
 // Sizes of the uniform arrays every operator shader declares.
 inline constexpr int kConstants = 8;
-inline constexpr int kWeights = 128;
+inline constexpr int kWeights = 361;  // (2 * 9 + 1)^2
 
 // The complete compute shader of operator `name`, or empty when the operator
 // has no GPU implementation.
