@@ -26,6 +26,9 @@ TEST(GpuChain, ChainsOfTwoOrThreeOperatorsEqualTheCpuChain) {
                                   {"ext-schlick", {"max_radius=3", "d=0.7"}}}),
                         1e-4);
   expect_gpu_equals_cpu(chain_of({{"mean", {"radius=1"}}, {"amplitude-to-db", {}}}), 1e-4);
+  // The wavelet's own passes inside a chain: margin 6 + 2, the whole border.
+  expect_gpu_equals_cpu(
+      chain_of({{"wavelet", {"levels=2"}}, {"ext-reinhard-devlin", {"max_radius=2"}}}), 1e-4, 1);
 }
 
 TEST(GpuChain, OutputIsTheInteriorWithAOneSampleBorder) {
@@ -74,6 +77,10 @@ TEST(GpuChain, RadiiBeyondTheOverlapBorderAreRefused) {
   auto second = gpu().run(chain_of({{"lee", {"radius=4"}}, {"mean", {"radius=5"}}}), tile.raster,
                           border, &stats);
   EXPECT_EQ(second.error().message.rfind("mean:", 0), 0u) << second.error().message;
+  // Three wavelet scales need 14 samples.
+  auto wavelet3 = gpu().run(chain_of({{"wavelet", {"levels=3"}}}), tile.raster, border, &stats);
+  ASSERT_FALSE(wavelet3);
+  EXPECT_EQ(wavelet3.error().message.rfind("wavelet: needs a 14-sample margin", 0), 0u);
   // Radii are per level: one level coarser, radius 9 becomes 5 and fits.
   const auto coarser = gpuprocess::scale_chain(chain_of({{"lee", {"radius=9"}}}), 2);
   EXPECT_TRUE(gpu().run(coarser, tile.raster, border, &stats));
@@ -94,10 +101,11 @@ TEST(GpuChain, BadChainsAreOneLineErrors) {
   ASSERT_FALSE(no_stats);
   EXPECT_EQ(no_stats.error().message, "linear: needs the dataset's global statistics");
   const process::GlobalStats stats = sar_stats();
-  EXPECT_FALSE(gpuprocess::runs_on_gpu("wavelet"));
-  auto cpu_only = gpu().run(chain_of({{"wavelet", {"levels=1"}}}), tile.raster, border, &stats);
-  ASSERT_FALSE(cpu_only);
-  EXPECT_NE(cpu_only.error().message.find("wavelet: no GPU implementation"), std::string::npos);
+  // Every operator of the catalogue has a GPU implementation (a new one
+  // without is refused by run() with "no GPU implementation yet").
+  for (const auto& op : process::operator_catalogue()) {
+    EXPECT_TRUE(gpuprocess::runs_on_gpu(op.name)) << op.name;
+  }
   auto no_border = gpu().run(chain_of({{"linear", {}}}), tile.raster, 0, &stats);
   ASSERT_FALSE(no_border);
   EXPECT_NE(no_border.error().message.find("border"), std::string::npos);

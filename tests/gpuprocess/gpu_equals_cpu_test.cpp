@@ -61,7 +61,8 @@ INSTANTIATE_TEST_SUITE_P(
                       Case{"median", {"radius=6"}, 1}, Case{"gauss", {"radius=4"}},
                       Case{"gauss", {"radius=2", "sigma=3"}}, Case{"kuan", {"radius=3", "looks=3"}},
                       Case{"frost", {"radius=3"}}, Case{"frost", {"radius=2", "deramp=2"}},
-                      Case{"gamma-map", {"radius=3", "looks=2"}}),
+                      Case{"gamma-map", {"radius=3", "looks=2"}}, Case{"wavelet", {"levels=1"}},
+                      Case{"wavelet", {"levels=2", "k=2", "looks=3"}}),
     case_name);
 
 INSTANTIATE_TEST_SUITE_P(LocalMappings, GpuEqualsCpu,

@@ -7,16 +7,18 @@
 #include "gl.h"
 #include "gl_program.h"
 #include "operator_shaders.h"
+#include "wavelet_passes.h"
 
 namespace relief::gpuprocess {
 
 bool runs_on_gpu(const std::string& name) {
-  return !operator_shader(name).empty();
+  return name == "wavelet" || !operator_shader(name).empty();  // wavelet: wavelet_passes.h
 }
 
 struct GpuProcessor::Impl {
   std::map<std::string, GlProgram> programs;  // compiled on first use
   GlTexture ping, pong;                       // the size of the last tile
+  WaveletPasses wavelet;
 
   Result<GLuint> program(const std::string& name) {
     if (auto it = programs.find(name); it != programs.end()) return it->second.id();
@@ -87,10 +89,18 @@ Result<tiles::Raster> GpuProcessor::run(const OperatorChain& chain, const tiles:
   const GlTexture* out = &im.pong;
   int consumed = 0;  // border used by the steps so far
   for (const auto& s : chain.steps) {
-    const GLuint prog = RELIEF_TRY(im.program(s.op->name));
-    consumed += process::margin_of(*s.op, s.params);
-    im.dispatch(prog, step_uniforms(s, stats ? *stats : no_stats), *in, *out, consumed,
-                w - 2 * consumed, h - 2 * consumed);
+    const int m = process::margin_of(*s.op, s.params);
+    if (s.op->name == "wavelet" && m > 0) {
+      RELIEF_CHECK(
+          im.wavelet.run(s.params, *in, *out, consumed, w - 2 * consumed, h - 2 * consumed));
+    } else {
+      // A wavelet without a scale left (a coarse level) is the identity, as on the CPU.
+      const std::string name = s.op->name == "wavelet" ? "identity" : s.op->name;
+      const GLuint prog = RELIEF_TRY(im.program(name));
+      im.dispatch(prog, step_uniforms(s, stats ? *stats : no_stats), *in, *out, consumed + m,
+                  w - 2 * (consumed + m), h - 2 * (consumed + m));
+    }
+    consumed += m;
     std::swap(in, out);
   }
   tiles::Raster result(tiles::SampleType::Float32, 1, w - 2 * (border - 1), h - 2 * (border - 1));

@@ -22,6 +22,9 @@ uniform double k[8];
 uniform double w[361];
 
 float at(ivec2 p) { return texelFetch(src, p, 0).r; }
+)";
+
+constexpr const char* kMath = R"(
 // Bit tests: nodata survives whatever the compiler assumes about NaN.
 bool nodata(float v) { return (floatBitsToUint(v) & 0x7fffffffu) > 0x7f800000u; }
 float nan_f() { return uintBitsToFloat(0x7fc00000u); }
@@ -70,6 +73,9 @@ double dpow(double a, double b) {
   return dexp(b * dlog(a));
 }
 
+)";
+
+constexpr const char* kMain = R"(
 float apply(ivec2 p);
 void main() {
   uvec2 id = gl_GlobalInvocationID.xy;
@@ -458,6 +464,8 @@ double local_map(ivec2 p, double v) {
 }
 )"},
       {"durand", kDurand},
+      // Not an operator: the wavelet's step at levels where no scale is left.
+      {"identity", point("return a;")},
   };
   return map;
 }
@@ -491,10 +499,14 @@ double tumblin_gamma(double luminance) {
 
 }  // namespace
 
+std::string shader_math() {
+  return kMath;
+}
+
 std::string operator_shader(const std::string& name) {
   auto it = bodies().find(name);
   if (it == bodies().end()) return {};
-  return kPrelude + it->second;
+  return std::string(kPrelude) + kMath + kMain + it->second;
 }
 
 StepUniforms step_uniforms(const ChainStep& step, const process::GlobalStats& g) {

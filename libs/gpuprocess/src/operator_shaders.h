@@ -18,6 +18,10 @@ namespace relief::gpuprocess {
 inline constexpr int kConstants = 8;
 inline constexpr int kWeights = 361;  // (2 * 9 + 1)^2
 
+// Double-precision dlog, dlog1p, dlog10, dexp, dpow and the nodata helpers
+// (nodata(float), nan_f(), inf_d()), for passes with their own bindings.
+std::string shader_math();
+
 // The complete compute shader of operator `name`, or empty when the operator
 // has no GPU implementation.
 std::string operator_shader(const std::string& name);
