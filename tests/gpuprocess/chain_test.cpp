@@ -26,6 +26,8 @@ TEST(GpuChain, ChainsOfTwoOrThreeOperatorsEqualTheCpuChain) {
                                   {"ext-schlick", {"max_radius=3", "d=0.7"}}}),
                         1e-4);
   expect_gpu_equals_cpu(chain_of({{"mean", {"radius=1"}}, {"amplitude-to-db", {}}}), 1e-4);
+  // dB and back: db-to-amplitude on the range it is meant for.
+  expect_gpu_equals_cpu(chain_of({{"amplitude-to-db", {}}, {"db-to-amplitude", {}}}), 1e-4);
   // The wavelet's own passes inside a chain: margin 6 + 2, the whole border.
   expect_gpu_equals_cpu(
       chain_of({{"wavelet", {"levels=2"}}, {"ext-reinhard-devlin", {"max_radius=2"}}}), 1e-4, 1);

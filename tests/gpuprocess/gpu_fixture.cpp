@@ -6,6 +6,7 @@
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <map>
 #include <memory>
 
 #include "../ingest/built_stores.h"
@@ -59,16 +60,37 @@ double max_relative_error(const tiles::Raster& gpu, const tiles::Raster& cpu) {
   double worst = 0;
   const auto g = gpu.f32(), c = cpu.f32();
   for (size_t i = 0; i < g.size(); ++i) {
-    if (std::isnan(g[i]) || std::isnan(c[i])) {
-      if (std::isnan(g[i]) != std::isnan(c[i])) return kInf;
+    if (g[i] == c[i]) continue;  // infinities included
+    if (std::isnan(g[i]) || std::isnan(c[i]) || std::isinf(g[i]) || std::isinf(c[i])) {
+      if (!(std::isnan(g[i]) && std::isnan(c[i]))) return kInf;
       continue;
     }
     const double d = std::abs(static_cast<double>(g[i]) - c[i]);
-    if (d == 0) continue;
     worst = std::max(worst, d / std::abs(static_cast<double>(c[i])));
   }
   return worst;
 }
+
+namespace {
+
+// The level's tiles, those with the most valid samples first (the image's
+// edges give nodata too); computed once per level.
+const std::vector<geo::TileKey>& fullest_tiles(int level) {
+  static std::map<int, std::vector<geo::TileKey>> cache;
+  if (auto it = cache.find(level); it != cache.end()) return it->second;
+  std::vector<std::pair<uint64_t, geo::TileKey>> counted;
+  for (const auto& e : sar_store().index(level).entries()) {
+    const tiles::Tile t = must_read(sar_store(), e.key);
+    counted.emplace_back(t.raster.stats(0, 0, t.raster.width(), t.raster.height()).valid_count,
+                         e.key);
+  }
+  std::ranges::stable_sort(counted, std::greater<>(), [](const auto& c) { return c.first; });
+  std::vector<geo::TileKey> keys;
+  for (const auto& c : counted) keys.push_back(c.second);
+  return cache.emplace(level, std::move(keys)).first->second;
+}
+
+}  // namespace
 
 double expect_gpu_equals_cpu(const gpuprocess::OperatorChain& chain, double tolerance, int tiles) {
   const tiles::Store& store = sar_store();
@@ -79,22 +101,10 @@ double expect_gpu_equals_cpu(const gpuprocess::OperatorChain& chain, double tole
   int compared = 0;
   for (int level : {max, max - 1, max - 2}) {
     const auto scaled = gpuprocess::scale_chain(chain, std::ldexp(1.0, max - level));
-    // The tiles with the most valid samples (the image's edges give nodata too).
-    struct Candidate {
-      uint64_t valid;
-      std::string key;
-      tiles::Tile tile;
-    };
-    std::vector<Candidate> candidates;
-    for (const auto& e : store.index(level).entries()) {
-      tiles::Tile t = must_read(store, e.key);
-      const auto valid = t.raster.stats(0, 0, t.raster.width(), t.raster.height()).valid_count;
-      candidates.push_back({valid, e.key.to_string(), std::move(t)});
-    }
-    std::ranges::sort(candidates, std::greater<>(), &Candidate::valid);
-    for (size_t i = 0; i < candidates.size() && i < static_cast<size_t>(tiles); ++i) {
-      const tiles::Tile& tile = candidates[i].tile;
-      const std::string& key = candidates[i].key;
+    const std::vector<geo::TileKey>& keys = fullest_tiles(level);
+    for (size_t i = 0; i < keys.size() && i < static_cast<size_t>(tiles); ++i) {
+      const tiles::Tile tile = must_read(store, keys[i]);
+      const std::string key = keys[i].to_string();
       auto cpu = gpuprocess::run_chain_cpu(scaled, tile.raster, border, &stats, ex);
       auto got = gpu().run(scaled, tile.raster, border, &stats);
       EXPECT_TRUE(cpu) << cpu.error().message;
