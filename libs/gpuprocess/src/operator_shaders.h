@@ -6,6 +6,7 @@
 // them), so results differ from the CPU's only where the GPU's double
 // exp/log (shader_math below) round differently.
 #include <array>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -17,6 +18,18 @@ namespace relief::gpuprocess {
 // Sizes of the uniform arrays every operator shader declares.
 inline constexpr int kConstants = 8;
 inline constexpr int kWeights = 361;  // (2 * 9 + 1)^2
+
+// The parts of every one-pass operator shader (shader_prelude.cpp): bindings
+// and uniforms, then shader_math(), then main(), which calls the operator's
+// `float apply(ivec2 p)`.
+std::string shader_frame();
+std::string shader_main();
+
+// Operator name -> the GLSL that defines apply() (and what it needs).
+using ShaderBodies = std::map<std::string, std::string>;
+void add_point_shaders(ShaderBodies& bodies);          // mapping_shaders.cpp
+void add_speckle_shaders(ShaderBodies& bodies);        // speckle_shaders.cpp
+void add_local_mapping_shaders(ShaderBodies& bodies);  // local_mapping_shaders.cpp
 
 // Double-precision dlog, dlog1p, dlog10, dexp, dpow and the nodata helpers
 // (nodata(float), nan_f(), inf_d()), for passes with their own bindings.
