@@ -1,7 +1,7 @@
 #pragma once
 // The GPU operator pipeline (seed 003 §1.3.3): a tile with its overlap border
-// is uploaded as an R32F texture, every step of an operator chain runs as a
-// compute-shader pass between two ping-pong R32F textures, and the tile's
+// is uploaded as an R32F texture, every step of an operator chain runs as
+// compute-shader passes between two ping-pong R32F textures, and the tile's
 // interior with a one-sample border is read back. Results equal the CPU
 // operators of libs/process within the tolerances of docs/gpu-processing.md.
 //
