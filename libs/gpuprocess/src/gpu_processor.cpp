@@ -1,0 +1,116 @@
+#include "relief/gpuprocess/gpu_processor.h"
+
+#include <map>
+
+#include <fmt/format.h>
+
+#include "gl.h"
+#include "gl_program.h"
+#include "operator_shaders.h"
+#include "wavelet_passes.h"
+
+namespace relief::gpuprocess {
+
+bool runs_on_gpu(const std::string& name) {
+  return name == "wavelet" || !operator_shader(name).empty();  // wavelet: wavelet_passes.h
+}
+
+struct GpuProcessor::Impl {
+  std::map<std::string, GlProgram> programs;  // compiled on first use
+  GlTexture ping, pong;                       // the size of the last tile
+  WaveletPasses wavelet;
+
+  Result<GLuint> program(const std::string& name) {
+    if (auto it = programs.find(name); it != programs.end()) return it->second.id();
+    GlProgram p = RELIEF_TRY(compile_compute(name, operator_shader(name)));
+    return programs.emplace(name, std::move(p)).first->second.id();
+  }
+
+  void ensure_textures(int width, int height) {
+    if (ping.width() == width && ping.height() == height) return;
+    ping = GlTexture(width, height);
+    pong = GlTexture(width, height);
+  }
+
+  // One pass: reads `in`, writes the `extent` texels of `out` from `origin` on.
+  void dispatch(GLuint prog, const StepUniforms& u, const GlTexture& in, const GlTexture& out,
+                int origin, int width, int height) {
+    glUseProgram(prog);
+    glProgramUniform2i(prog, glGetUniformLocation(prog, "origin"), origin, origin);
+    glProgramUniform2i(prog, glGetUniformLocation(prog, "extent"), width, height);
+    if (GLint loc = glGetUniformLocation(prog, "r"); loc >= 0) glProgramUniform1i(prog, loc, u.r);
+    if (GLint loc = glGetUniformLocation(prog, "k"); loc >= 0) {
+      glProgramUniform1dv(prog, loc, kConstants, u.k.data());
+    }
+    if (GLint loc = glGetUniformLocation(prog, "w"); loc >= 0 && !u.w.empty()) {
+      glProgramUniform1dv(prog, loc, static_cast<GLsizei>(u.w.size()), u.w.data());
+    }
+    glBindTextureUnit(0, in.id());
+    glBindImageTexture(0, out.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_R32F);
+    constexpr int kGroup = 8;  // local_size of the shaders
+    glDispatchCompute(static_cast<GLuint>((width + kGroup - 1) / kGroup),
+                      static_cast<GLuint>((height + kGroup - 1) / kGroup), 1);
+    // The next pass samples what this one stored.
+    glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_TEXTURE_UPDATE_BARRIER_BIT);
+  }
+};
+
+GpuProcessor::GpuProcessor(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+GpuProcessor::~GpuProcessor() = default;
+
+Result<std::unique_ptr<GpuProcessor>> GpuProcessor::create() {
+  GLint major = 0, minor = 0;
+  glGetIntegerv(GL_MAJOR_VERSION, &major);
+  glGetIntegerv(GL_MINOR_VERSION, &minor);
+  if (major * 10 + minor < 45) {
+    return fail(fmt::format("GPU processing needs OpenGL 4.5 (the current context has {}.{})",
+                            major, minor));
+  }
+  return std::unique_ptr<GpuProcessor>(new GpuProcessor(std::make_unique<Impl>()));
+}
+
+Result<tiles::Raster> GpuProcessor::run(const OperatorChain& chain, const tiles::Raster& tile,
+                                        int border, const process::GlobalStats* stats) {
+  assert(tile.type() == tiles::SampleType::Float32 && tile.bands() == 1);
+  RELIEF_CHECK(check_fits(chain, border));
+  RELIEF_CHECK(check_stats(chain, stats));
+  for (const auto& s : chain.steps) {
+    if (!runs_on_gpu(s.op->name)) {
+      return fail(
+          fmt::format("{}: no GPU implementation yet (docs/gpu-processing.md)", s.op->name));
+    }
+  }
+  const int w = tile.width(), h = tile.height();
+  Impl& im = *impl_;
+  im.ensure_textures(w, h);
+  glTextureSubImage2D(im.ping.id(), 0, 0, 0, w, h, GL_RED, GL_FLOAT, tile.f32().data());
+  const process::GlobalStats no_stats;
+  const GlTexture* in = &im.ping;
+  const GlTexture* out = &im.pong;
+  int consumed = 0;  // border used by the steps so far
+  for (const auto& s : chain.steps) {
+    const int m = process::margin_of(*s.op, s.params);
+    if (s.op->name == "wavelet" && m > 0) {
+      RELIEF_CHECK(
+          im.wavelet.run(s.params, *in, *out, consumed, w - 2 * consumed, h - 2 * consumed));
+    } else {
+      // A wavelet without a scale left (a coarse level) is the identity, as on the CPU.
+      const std::string name = s.op->name == "wavelet" ? "identity" : s.op->name;
+      const GLuint prog = RELIEF_TRY(im.program(name));
+      im.dispatch(prog, step_uniforms(s, stats ? *stats : no_stats), *in, *out, consumed + m,
+                  w - 2 * (consumed + m), h - 2 * (consumed + m));
+    }
+    consumed += m;
+    std::swap(in, out);
+  }
+  tiles::Raster result(tiles::SampleType::Float32, 1, w - 2 * (border - 1), h - 2 * (border - 1));
+  const auto bytes = static_cast<GLsizei>(result.byte_size());
+  glGetTextureSubImage(in->id(), 0, border - 1, border - 1, 0, result.width(), result.height(), 1,
+                       GL_RED, GL_FLOAT, bytes, result.f32().data());
+  if (const GLenum e = glGetError(); e != GL_NO_ERROR) {
+    return fail(fmt::format("GPU processing: GL error 0x{:x}", e));
+  }
+  return result;
+}
+
+}  // namespace relief::gpuprocess
