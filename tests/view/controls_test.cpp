@@ -249,6 +249,20 @@ TEST_F(OrbitTest, DraggingRotatesAboutThePickedPoint) {
   EXPECT_EQ(orbit_->linear_speed(), 0);
 }
 
+TEST_F(OrbitTest, DraggingAViewStraightDownTurnsItsHeading) {
+  lod::Camera down = level_camera(11000);
+  down.pitch = -90;
+  orbit_->set_camera(down);
+  for (const auto& e : {cursor(400, 300), button(true), cursor(440, 300)}) orbit_->push(e);
+  const lod::Camera& c = orbit_->update(kDt, ground_);
+  EXPECT_NEAR(c.heading, -10, 1e-6);
+  EXPECT_NEAR(c.pitch, -90, 1e-6);
+  EXPECT_EQ(c.roll, 0);
+  EXPECT_NEAR(c.lon, down.lon, 1e-9);
+  EXPECT_NEAR(c.lat, down.lat, 1e-9);
+  EXPECT_NEAR(c.height, 11000, 1e-6);
+}
+
 TEST_F(OrbitTest, KeysPanAtTheHeightAboveTheGround) {
   const double above = start_.height - 1000;
   orbit_->push(key_down(Key::up));

@@ -47,6 +47,7 @@ class ControllerBase : public Controller {
  private:
   std::vector<InputEvent> queue_;
   std::array<bool, 64> keys_{};
+  static_assert(static_cast<size_t>(Key::f12) < 64);
   std::array<bool, 3> buttons_{};
   double linear_speed_ = 0, angular_speed_ = 0;
 };

@@ -30,7 +30,10 @@ lod::Camera with_frame(lod::Camera c, const Vec3& eye, const Vec3& forward, cons
   c.height = g.height_m;
   const Vec3 e = lod::east_at(c.lon), n = lod::north_at(c.lon, c.lat), u = lod::up_at(c.lon, c.lat);
   const Vec3 f = lod::normalize(forward);
-  c.heading = std::atan2(lod::dot(f, e), lod::dot(f, n)) / kDeg;
+  // Straight down (or up) the heading is the screen's top's (bottom's)
+  // direction over the ground, with no roll.
+  const Vec3 level = lod::length(f - u * lod::dot(f, u)) > 1e-9 ? f : up * -lod::dot(f, u);
+  c.heading = std::atan2(lod::dot(level, e), lod::dot(level, n)) / kDeg;
   c.pitch = std::asin(std::clamp(lod::dot(f, u), -1.0, 1.0)) / kDeg;
   // make_view's right is level_right turned by the roll towards up0.
   const double h = c.heading * kDeg;
