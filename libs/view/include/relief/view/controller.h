@@ -41,7 +41,8 @@ class Controller {
  public:
   virtual ~Controller() = default;
   virtual ControlMode mode() const = 0;
-  // Queues an input; it acts at the next update().
+  // Queues an input; it acts at the next update(). (A resize event sets the
+  // camera's viewport; the keys each mode uses are in docs/viewer.md.)
   virtual void push(const InputEvent& event) = 0;
   // Applies the queued input and moves the viewpoint by `dt` seconds, never
   // below the ground. Returns the camera of the frame.
