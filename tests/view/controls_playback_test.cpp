@@ -73,5 +73,22 @@ TEST(ControlsPlayback, ARecordedFlightPlaysBackToTheNanometre) {
   EXPECT_GT(player->linear_speed(), 100);  // speeds are the path's
 }
 
+TEST(ControlsPlayback, ACutIsAJumpWithNoSpeed) {
+  lod::Camera a;
+  a.lon = 1.4, a.lat = 42.6, a.height = 3000;
+  lod::Camera b = a;
+  b.lon = 1.6;
+  ControllerOptions o;
+  o.path = {{0, a, false}, {1, a, false}, {1.5, b, true}, {2, b, false}};
+  auto player = make_controller(ControlMode::playback, a, o);
+  const Ground ground = [](double, double) -> std::optional<double> { return 0.0; };
+  for (int frame = 0; frame < 8; ++frame) {
+    const lod::Camera& c = player->update(0.25, ground);
+    EXPECT_EQ(c.lon, frame < 5 ? 1.4 : 1.6) << frame;  // the sixth step reaches 1.5 s
+    EXPECT_EQ(player->linear_speed(), 0) << frame;
+  }
+  EXPECT_TRUE(player->finished());
+}
+
 }  // namespace
 }  // namespace relief::view

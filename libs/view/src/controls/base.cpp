@@ -50,10 +50,13 @@ const lod::Camera& ControllerBase::update(double dt, const Ground& ground) {
         break;
     }
   }
+  jumped_ = false;
   step(dt, ground);
   camera_.height = std::max(camera_.height, least_height(ground, camera_.lon, camera_.lat));
   const Frame after = frame_of(camera_);
-  if (dt > 0) {
+  if (jumped_) {
+    linear_speed_ = angular_speed_ = 0;
+  } else if (dt > 0) {
     linear_speed_ = lod::length(after.eye - before.eye) / dt;
     const double turn =
         std::max(angle_between(before.forward, after.forward), angle_between(before.up, after.up));

@@ -42,6 +42,9 @@ class ControllerBase : public Controller {
 
   lod::Camera camera_;
   ControllerOptions options_;
+  // Set by a step that jumped (a cut in a path): its speeds are 0, not the
+  // jump's.
+  bool jumped_ = false;
   double cursor_x_ = 0, cursor_y_ = 0;
 
  private:

@@ -1,6 +1,7 @@
 // Playback: the camera of the path at the controller's own time (the sum of
 // the update steps from 0), so a path recorded frame by frame with the same
 // steps plays back bit for bit. Field of view and viewport stay the window's.
+// A cut is a jump: the frame that crosses it reports no speed.
 #include "base.h"
 #include "modes.h"
 
@@ -20,8 +21,14 @@ class Playback final : public ControllerBase {
 
  private:
   void step(double dt, const Ground&) override {
+    if (options_.path.empty()) return;
+    const double before = options_.path.front().time + time_;
     time_ += dt;
-    if (!options_.path.empty()) place();
+    const double now = options_.path.front().time + time_;
+    for (const lod::Keyframe& k : options_.path) {
+      if (k.cut && before < k.time && k.time <= now) jumped_ = true;
+    }
+    place();
   }
   void place() {
     const lod::Camera c = lod::camera_at(options_.path, options_.path.front().time + time_);
