@@ -3,6 +3,7 @@
 // picking the terrain point of a pixel.
 #include <cmath>
 
+#include "controls_input.h"
 #include "loaded_scene.h"
 #include "relief/geo/ellipsoid.h"
 #include "relief/lod/terrain_model.h"
@@ -91,6 +92,27 @@ TEST_F(GroundTest, APickIsTheFirstGroundPointAlongThePixelsRay) {
   lod::Camera up = kView;
   up.pitch = 20;
   EXPECT_FALSE(pick(up, 80, 0.5, ground));
+}
+
+TEST_F(GroundTest, OrbitZoomKeepsTheTerrainPointUnderTheCursor) {
+  load(kView);
+  const Ground ground = resident_ground(*scene_);
+  auto orbit = make_controller(ControlMode::orbit, kView);
+  const auto p = pick(kView, 120, 90, ground);
+  ASSERT_TRUE(p);
+  const lod::Vec3 point = lod::ecef(p->lon, p->lat, p->height);
+  orbit->push(view::testing::cursor(120, 90));
+  for (int i = 0; i < 8; ++i) {
+    orbit->push(view::testing::scroll(1));
+    auto view = lod::make_view(orbit->update(1.0 / 60, ground));
+    ASSERT_TRUE(view);
+    double sx = 0, sy = 0;
+    ASSERT_TRUE(view->project(point, sx, sy));
+    EXPECT_NEAR(sx, 120, 1e-6);
+    EXPECT_NEAR(sy, 90, 1e-6);
+    EXPECT_NEAR(lod::length(view->eye - point), p->distance * std::pow(0.8, i + 1),
+                1e-6 * p->distance);
+  }
 }
 
 }  // namespace
