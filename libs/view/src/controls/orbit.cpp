@@ -2,6 +2,7 @@
 // the cursor, the wheel zooms toward the point under the cursor (it stays
 // under it), keys pan at a speed proportional to the height above the ground
 // and turn, tilt and zoom about the point at the centre of the view.
+#include <algorithm>
 #include <cmath>
 
 #include "base.h"
@@ -49,7 +50,8 @@ class Orbit final : public ControllerBase {
       const double v = kPanRate * height_above(ground) * dt;
       camera_ = move_level(camera_, ahead * v, side * v);
     }
-    const int turn = axis(Key::q, Key::e) + (shift ? axis(Key::left, Key::right) : 0);
+    const int turn =
+        std::clamp(axis(Key::q, Key::e) + (shift ? axis(Key::left, Key::right) : 0), -1, 1);
     const int tilt = shift ? axis(Key::up, Key::down) : 0;
     const double cx = camera_.width / 2.0, cy = camera_.height_px / 2.0;
     if (turn || tilt) {
