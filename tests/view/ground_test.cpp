@@ -59,6 +59,12 @@ TEST_F(GroundTest, AfterLoadingItIsTheFinestTileAtItsSamples) {
   EXPECT_GT(at_finest, 20);
   // Outside the data: the ellipsoid, as drawn.
   EXPECT_EQ(ground(100, 0), 0.0);
+  // Exaggerated heights, as drawn.
+  const double h = *ground(1.5, 42.6);
+  render::RenderOptions exaggerated = scene_->options().render;
+  exaggerated.exaggeration = 2.5f;
+  scene_->set_render_options(exaggerated);
+  EXPECT_DOUBLE_EQ(*ground(1.5, 42.6), 2.5 * h);
 }
 
 TEST_F(GroundTest, APickIsTheFirstGroundPointAlongThePixelsRay) {

@@ -56,7 +56,9 @@ Ground resident_ground(Scene& scene) {
       if (!tile) continue;
       double fi = 0, fj = 0;
       store->grid().to_sample_coords(key, lon, lat, fi, fj);
-      return lod::TerrainModel::bilinear(*tile, terrain.border(), fi + 0.5, fj + 0.5);
+      // As drawn: the renderer lifts heights by the exaggeration.
+      return double{scene.options().render.exaggeration} *
+             lod::TerrainModel::bilinear(*tile, terrain.border(), fi + 0.5, fj + 0.5);
     }
     // No tile of the store: the model draws the ellipsoid there.
     return covered ? std::nullopt : std::optional<double>(0.0);
