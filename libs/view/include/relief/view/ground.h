@@ -13,9 +13,10 @@ class Scene;
 
 // Heights from the finest resident tile of the scene's elevation store,
 // bilinear and exaggerated as the renderer draws them (TerrainModel::bilinear
-// times the scene's render exaggeration); 0 where the store has no tile. Interactive scenes: never
-// waits for I/O, requests nothing and pins nothing beyond the query. Complete scenes (no loader)
-// read through their terrain model's blocking cache, as their frames do.
+// times the scene's render exaggeration); 0 where the store has no tile.
+// Interactive scenes: never waits for I/O, requests nothing and pins nothing
+// beyond the query. Complete scenes (no loader) read through their terrain
+// model's blocking cache, as their frames do.
 // Valid while the scene lives; call on the scene's (the GL) thread.
 Ground resident_ground(Scene& scene);
 
