@@ -1,48 +1,16 @@
-// PLACEHOLDER until the control modes land: every mode holds the camera still
-// except playback, which follows its path.
+// The control modes by name; each mode is one file in controls/.
 #include "relief/view/controller.h"
 
+#include "controls/modes.h"
+
 namespace relief::view {
-namespace {
-
-class HoldStill final : public Controller {
- public:
-  HoldStill(ControlMode mode, const lod::Camera& start, const ControllerOptions& options)
-      : mode_(mode), camera_(start), path_(options.path) {}
-  ControlMode mode() const override { return mode_; }
-  void push(const InputEvent&) override {}
-  const lod::Camera& update(double dt, const Ground&) override {
-    time_ += dt;
-    if (mode_ == ControlMode::playback && !path_.empty()) {
-      const lod::Camera c = lod::camera_at(path_, path_.front().time + time_);
-      camera_.lon = c.lon, camera_.lat = c.lat, camera_.height = c.height;
-      camera_.heading = c.heading, camera_.pitch = c.pitch, camera_.roll = c.roll;
-    }
-    return camera_;
-  }
-  const lod::Camera& camera() const override { return camera_; }
-  void set_camera(const lod::Camera& camera) override { camera_ = camera; }
-  double linear_speed() const override { return 0; }
-  double angular_speed() const override { return 0; }
-  bool finished() const override {
-    return mode_ == ControlMode::playback &&
-           (path_.empty() || path_.front().time + time_ >= path_.back().time);
-  }
-
- private:
-  ControlMode mode_;
-  lod::Camera camera_;
-  std::vector<lod::Keyframe> path_;
-  double time_ = 0;
-};
-
-}  // namespace
 
 std::optional<ControlMode> parse_control_mode(std::string_view name) {
   for (ControlMode m : {ControlMode::orbit, ControlMode::aircraft, ControlMode::walk,
                         ControlMode::motorbike, ControlMode::playback}) {
     if (to_string(m) == name) return m;
   }
+  if (name == "globe") return ControlMode::orbit;
   return std::nullopt;
 }
 
@@ -64,7 +32,19 @@ std::string_view to_string(ControlMode mode) {
 
 std::unique_ptr<Controller> make_controller(ControlMode mode, const lod::Camera& start,
                                             const ControllerOptions& options) {
-  return std::make_unique<HoldStill>(mode, start, options);
+  switch (mode) {
+    case ControlMode::orbit:
+      return controls::make_orbit(start, options);
+    case ControlMode::aircraft:
+      return controls::make_aircraft(start, options);
+    case ControlMode::walk:
+      return controls::make_walk(start, options);
+    case ControlMode::motorbike:
+      return controls::make_motorbike(start, options);
+    case ControlMode::playback:
+      return controls::make_playback(start, options);
+  }
+  return nullptr;
 }
 
 }  // namespace relief::view

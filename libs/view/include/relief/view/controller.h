@@ -25,9 +25,13 @@ std::string_view to_string(ControlMode mode);
 using Ground = std::function<std::optional<double>(double lon, double lat)>;
 
 struct ControllerOptions {
-  double eye_height = 1.8;    // walk: metres above the ground
-  double clearance = 2.0;     // every mode: the least height above the ground
-  double max_slope_deg = 35;  // walk: steeper ground is not climbed
+  double eye_height = 1.8;       // walk: metres above the ground
+  double clearance = 1.0;        // every mode: the least height above the ground
+  double max_slope_deg = 35;     // walk: steeper ground is not climbed
+  double walk_speed = 1.5;       // walk: metres per second (four times that with shift)
+  double bike_eye_height = 1.2;  // motorbike: metres above the ground
+  double max_bike_speed = 60;    // motorbike: metres per second
+  double speed = 0;              // aircraft, motorbike: the speed at the start, m/s
   // playback: the path played (the controller keeps a copy), from time 0 of
   // the controller's own clock (the sum of update() steps).
   std::vector<lod::Keyframe> path;
@@ -37,7 +41,8 @@ class Controller {
  public:
   virtual ~Controller() = default;
   virtual ControlMode mode() const = 0;
-  // Queues an input; it acts at the next update().
+  // Queues an input; it acts at the next update(). (A resize event sets the
+  // camera's viewport; the keys each mode uses are in docs/viewer.md.)
   virtual void push(const InputEvent& event) = 0;
   // Applies the queued input and moves the viewpoint by `dt` seconds, never
   // below the ground. Returns the camera of the frame.

@@ -11,7 +11,12 @@ namespace relief::view {
 
 class Scene;
 
-// Heights from the finest resident tile of the scene's elevation store.
+// Heights from the finest resident tile of the scene's elevation store,
+// bilinear and exaggerated as the renderer draws them (TerrainModel::bilinear
+// times the scene's render exaggeration); 0 where the store has no tile.
+// Interactive scenes: never waits for I/O, requests nothing and pins nothing
+// beyond the query. Complete scenes (no loader) read through their terrain
+// model's blocking cache, as their frames do.
 // Valid while the scene lives; call on the scene's (the GL) thread.
 Ground resident_ground(Scene& scene);
 
@@ -21,7 +26,8 @@ struct Pick {
 };
 
 // The terrain point under pixel (x, y) (origin top-left) of `camera`, or
-// nullopt for sky.
+// nullopt for sky: the pixel's ray marched against `ground` in steps of half
+// its height above it, then bisected to the first crossing.
 std::optional<Pick> pick(const lod::Camera& camera, double x, double y, const Ground& ground);
 
 }  // namespace relief::view
