@@ -8,6 +8,7 @@
 #include "output_safety.h"
 #include "relief/lod/selection.h"
 #include "relief/render/terrain_renderer.h"
+#include "render_parallel.h"
 #include "render_path.h"
 #include "render_setup.h"
 
@@ -71,6 +72,11 @@ path options:
   --max-frames N     refuse a path of more than N frames (default 100000)
   --events FILE      every tile lifecycle event as JSON lines
   --no-frames        do not write frame images (statistics only)
+parallel (under mpirun -n N; docs/parallel.md):
+  --parallel MODE    sort-first:h|v|grid (screen tiles), sort-last:block|quadtree|active
+                     (quads, depth-composited) or wall:WALL.json (one display per rank,
+                     written as OUT_rR_cC.png); stills, complete frames
+  --parallel-timeout S  a rank that has not answered within S s fails the run (default 60)
 )";
 
 // What a render reads and writes, for the check that no output replaces an input.
@@ -210,7 +216,9 @@ int run_render(const std::vector<std::string>& argv) {
                            {"--until-complete"},
                            {"--max-frames"},
                            {"--events"},
-                           {"--no-frames", "", false}},
+                           {"--no-frames", "", false},
+                           {"--parallel"},
+                           {"--parallel-timeout"}},
                           "render");
   if (!args) return report_error(args.error().message);
   if (!args->get("--output")) return report_error("render: -o is required");
@@ -218,6 +226,7 @@ int run_render(const std::vector<std::string>& argv) {
     return report_error("render: --path replaces --camera and --look-at");
   }
   if (auto safe = check_render_outputs(*args); !safe) return report_error(safe.error().message);
+  if (args->get("--parallel")) return render_parallel(*args);
   auto setup = parse_render_setup(*args);
   if (!setup) return report_error(setup.error().message);
   if (args->get("--path")) return render_path(*args, *setup);

@@ -1,0 +1,268 @@
+#include "render_parallel.h"
+
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <thread>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "commands.h"
+#include "relief/parallel/comm.h"
+#include "relief/parallel/composite.h"
+#include "relief/parallel/decompose.h"
+#include "relief/parallel/frame_renderer.h"
+#include "relief/parallel/wall.h"
+#include "render_setup.h"
+
+namespace relief::cli {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using parallel::Comm;
+using parallel::ParallelMode;
+
+// What rank 0 broadcasts for a frame: compact, fixed size.
+struct FrameState {
+  int32_t ok = 0;  // 0: rank 0 failed, every rank stops
+  int32_t width = 0, height = 0;
+  double lon = 0, lat = 0, height_m = 0, heading = 0, pitch = 0, roll = 0, fov_y = 60;
+};
+
+// Per-rank figures, gathered on rank 0 for --stats.
+struct RankStats {
+  uint64_t quads = 0, triangles = 0, bytes_sent = 0;
+  double select_ms = 0, render_ms = 0, composite_ms = 0;
+};
+
+double ms_since(Clock::time_point t) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
+}
+
+// Fault injection for the tests (RELIEF_PARALLEL_FAULT=kill:R or hang:R):
+// rank R dies, or stops answering, before it sends its part of the frame.
+void inject_fault(int rank) {
+  const char* fault = std::getenv("RELIEF_PARALLEL_FAULT");
+  if (!fault) return;
+  const std::string f = fault;
+  if (f == fmt::format("kill:{}", rank)) std::raise(SIGKILL);
+  if (f == fmt::format("hang:{}", rank)) {
+    for (;;) std::this_thread::sleep_for(std::chrono::seconds(1));
+  }
+}
+
+// `out` with _rROW_cCOLUMN before its extension (a wall display's image).
+std::string display_file(const std::string& out, const parallel::Wall& wall, int index) {
+  const std::filesystem::path p(out);
+  const std::string name = fmt::format("{}_r{}_c{}{}", p.stem().string(), index / wall.columns,
+                                       index % wall.columns, p.extension().string());
+  return (p.parent_path() / name).string();
+}
+
+class Run {
+ public:
+  Run(const Args& args, const ParallelMode& mode, Comm& comm)
+      : args_(args), mode_(mode), comm_(comm) {}
+
+  int run() {
+    // Errors every rank meets alike (arguments, store, wall file): rank 0
+    // says it, every rank stops.
+    auto setup = parse_render_setup(args_);
+    if (!setup) return same_everywhere(setup.error().message);
+    if (mode_.kind == ParallelMode::Kind::wall) {
+      auto wall = parallel::read_wall(mode_.wall_file);
+      if (!wall) return same_everywhere("--parallel: " + wall.error().message);
+      if (wall->displays() != comm_.size()) {
+        return same_everywhere(fmt::format("--parallel: {} has {} displays for {} ranks",
+                                           mode_.wall_file, wall->displays(), comm_.size()));
+      }
+      if (args_.get("--size")) {
+        return same_everywhere("--parallel: a wall's size comes from its file, not --size");
+      }
+      setup->width = wall->virtual_width();
+      setup->height = wall->virtual_height();
+      wall_ = *wall;
+    }
+    if (!args_.get("--camera") == !args_.get("--look-at")) {
+      return same_everywhere("render: give exactly one of --camera and --look-at");
+    }
+    // Rank 0 holds the camera and sends the frame's state to everyone.
+    FrameState state;
+    if (comm_.rank() == 0) {
+      auto camera = parse_camera(args_, *setup);
+      if (camera) {
+        state = {1,
+                 camera->width,
+                 camera->height_px,
+                 camera->lon,
+                 camera->lat,
+                 camera->height,
+                 camera->heading,
+                 camera->pitch,
+                 camera->roll,
+                 camera->fov_y};
+      } else {
+        error_ = camera.error().message;
+      }
+    }
+    if (auto st = comm_.broadcast(parallel::bytes_of(state), 0); !st)
+      return fatal(st.error().message);
+    if (!state.ok) return comm_.rank() == 0 ? report_error(error_) : 1;
+    lod::Camera camera;
+    camera.lon = state.lon, camera.lat = state.lat, camera.height = state.height_m;
+    camera.heading = state.heading, camera.pitch = state.pitch, camera.roll = state.roll;
+    camera.fov_y = state.fov_y, camera.width = state.width, camera.height_px = state.height;
+    auto whole = lod::make_view(camera);
+    if (!whole) return same_everywhere(whole.error().message);
+    if (auto st = frame(*setup, *whole); !st) return fatal(st.error().message);
+    return 0;
+  }
+
+ private:
+  int same_everywhere(const std::string& message) {
+    return comm_.rank() == 0 ? report_error(message) : 1;
+  }
+  // An error of this rank alone: the others may wait for it, so the run ends.
+  [[noreturn]] int fatal(const std::string& message) {
+    report_error(comm_.size() > 1 && !message.starts_with("rank ")
+                     ? fmt::format("rank {}: {}", comm_.rank(), message)
+                     : message);
+    std::fflush(stderr);
+    comm_.abort(1);
+  }
+
+  Status frame(RenderSetup& setup, const lod::View& whole) {
+    view::SceneOptions so = scene_options(setup);
+    so.interactive = false;
+    so.loader.memory_budget = uint64_t{512} << 20;
+    auto context = RELIEF_TRY(render::GlContext::create_headless());
+    auto renderer = RELIEF_TRY(parallel::FrameRenderer::create(
+        setup.store, setup.imagery ? &*setup.imagery : nullptr, so));
+    RankStats stats;
+    auto start = Clock::now();
+    RELIEF_CHECK(renderer->select(whole));
+    stats.select_ms = ms_since(start);
+
+    const int n = comm_.size(), me = comm_.rank();
+    std::vector<lod::PixelRect> tiles;
+    lod::View view = whole;
+    std::vector<uint8_t> keep;
+    if (mode_.kind == ParallelMode::Kind::sort_last) {
+      std::vector<geo::TileKey> keys;
+      for (const lod::SelectedQuad& q : renderer->selection().quads) keys.push_back(q.key);
+      const std::vector<int> owner = parallel::assign_quads(
+          keys, renderer->quad_triangles(), setup.store.manifest().extent, mode_.quads, n);
+      for (int o : owner) keep.push_back(o == me);
+    } else {
+      if (mode_.kind == ParallelMode::Kind::sort_first) {
+        tiles = parallel::screen_tiles(whole.width, whole.height, mode_.screen, n);
+      } else {
+        for (int i = 0; i < n; ++i) tiles.push_back(wall_.display(i));
+      }
+      view = RELIEF_TRY(lod::with_window(whole, tiles[static_cast<size_t>(me)]));
+      keep = RELIEF_TRY(renderer->quads_in_window(view));
+    }
+    const int w = view.window.empty() ? whole.width : view.window.width;
+    const int h = view.window.empty() ? whole.height : view.window.height;
+    auto target = RELIEF_TRY(render::make_offscreen_target(w, h));
+    start = Clock::now();
+    const render::FrameStats drawn = RELIEF_TRY(renderer->draw(view, keep, *target));
+    parallel::Layer layer{w, h, RELIEF_TRY(target->read_rgba()), {}};
+    if (mode_.kind == ParallelMode::Kind::sort_last) layer.depth = RELIEF_TRY(target->read_depth());
+    stats.render_ms = ms_since(start);
+    stats.quads = drawn.quads;
+    stats.triangles = drawn.triangles;
+
+    inject_fault(me);
+    start = Clock::now();
+    const uint64_t bytes_before = comm_.bytes_sent();
+    const std::string out = *args_.get("--output");
+    std::vector<uint8_t> image;
+    if (mode_.kind == ParallelMode::Kind::sort_last) {
+      image = RELIEF_TRY(parallel::depth_composite(comm_, layer));
+    } else if (mode_.kind == ParallelMode::Kind::sort_first) {
+      image =
+          RELIEF_TRY(parallel::gather_tiles(comm_, layer.rgba, tiles, whole.width, whole.height));
+    } else {
+      RELIEF_CHECK(write_png(display_file(out, wall_, me), layer.rgba, w, h));
+    }
+    stats.composite_ms = ms_since(start);
+    stats.bytes_sent = comm_.bytes_sent() - bytes_before;
+    if (me == 0 && mode_.kind != ParallelMode::Kind::wall) {
+      RELIEF_CHECK(write_png(out, image, whole.width, whole.height));
+    }
+    return report(stats, whole);
+  }
+
+  // Gathers every rank's figures on rank 0: --stats and the closing line.
+  Status report(const RankStats& mine, const lod::View& whole) {
+    const int n = comm_.size();
+    std::vector<RankStats> all(static_cast<size_t>(n));
+    all[0] = mine;
+    if (comm_.rank() != 0) {
+      const Comm::Send send{0, std::as_bytes(std::span(&mine, 1))};
+      return comm_.exchange(std::span(&send, 1), {});
+    }
+    std::vector<Comm::Receive> receives;
+    for (int k = 1; k < n; ++k) {
+      receives.push_back({k, std::as_writable_bytes(std::span(&all[static_cast<size_t>(k)], 1))});
+    }
+    RELIEF_CHECK(comm_.exchange({}, receives));
+    std::vector<uint64_t> triangles;
+    nlohmann::json ranks = nlohmann::json::array();
+    for (const RankStats& s : all) {
+      triangles.push_back(s.triangles);
+      ranks.push_back({{"quads", s.quads},
+                       {"triangles", s.triangles},
+                       {"select_ms", s.select_ms},
+                       {"render_ms", s.render_ms},
+                       {"composite_ms", s.composite_ms},
+                       {"bytes_sent", s.bytes_sent}});
+    }
+    const double imbalance = parallel::imbalance(triangles);
+    if (auto path = args_.get("--stats")) {
+      const nlohmann::json stats = {{"mode", parallel::to_string(mode_)},
+                                    {"ranks", ranks},
+                                    {"width", whole.width},
+                                    {"height", whole.height},
+                                    {"triangle_imbalance", imbalance}};
+      RELIEF_CHECK(write_json(*path, stats.dump(1)));
+    }
+    std::printf("wrote %s: %dx%d, %s on %d ranks, triangles per rank max/mean - 1 = %.3f\n",
+                args_.get("--output")->c_str(), whole.width, whole.height,
+                parallel::to_string(mode_).c_str(), n, imbalance);
+    return {};
+  }
+
+  const Args& args_;
+  const ParallelMode& mode_;
+  Comm& comm_;
+  parallel::Wall wall_;
+  std::string error_;
+};
+
+}  // namespace
+
+int render_parallel(const Args& args) {
+  // A bad mode is said before MPI starts (by every rank alike).
+  auto mode = parallel::parse_parallel_mode(*args.get("--parallel"));
+  if (!mode) return report_error(mode.error().message);
+  double timeout = 60;
+  if (auto t = args.get("--parallel-timeout")) {
+    char* end = nullptr;
+    timeout = std::strtod(t->c_str(), &end);
+    if (end == t->c_str() || *end || !(timeout > 0 && timeout <= 86400)) {
+      return report_error(fmt::format("--parallel-timeout: '{}' is not seconds in (0, 86400]", *t));
+    }
+  }
+  if (args.get("--path")) return report_error("--parallel: renders stills only (no --path yet)");
+  auto comm = Comm::init(timeout);
+  if (!comm) return report_error(comm.error().message);
+  return Run(args, *mode, **comm).run();
+}
+
+}  // namespace relief::cli
