@@ -75,7 +75,7 @@ path options:
 parallel (under mpirun -n N; docs/parallel.md):
   --parallel MODE    sort-first:h|v|grid (screen tiles), sort-last:block|quadtree|active
                      (quads, depth-composited) or wall:WALL.json (one display per rank,
-                     written as OUT_rR_cC.png); stills, complete frames
+                     written as OUT_rR_cC.png); stills and --path, complete frames
   --parallel-timeout S  a rank that has not answered within S s fails the run (default 60)
 )";
 

@@ -1,6 +1,7 @@
 #include "render_parallel.h"
 
 #include <chrono>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
@@ -11,11 +12,13 @@
 #include <nlohmann/json.hpp>
 
 #include "commands.h"
+#include "relief/lod/camera_path.h"
 #include "relief/parallel/comm.h"
 #include "relief/parallel/composite.h"
 #include "relief/parallel/decompose.h"
 #include "relief/parallel/frame_renderer.h"
 #include "relief/parallel/wall.h"
+#include "relief/view/path_file.h"
 #include "render_setup.h"
 
 namespace relief::cli {
@@ -28,10 +31,29 @@ using parallel::ParallelMode;
 
 // What rank 0 broadcasts for a frame: compact, fixed size.
 struct FrameState {
-  int32_t ok = 0;  // 0: rank 0 failed, every rank stops
+  int32_t ok = 0;  // kFailed: rank 0 failed, every rank stops; kFrame: draw it; kEnd: done
   int32_t width = 0, height = 0;
+  int32_t index = 0;  // of the frame in a path
   double lon = 0, lat = 0, height_m = 0, heading = 0, pitch = 0, roll = 0, fov_y = 60;
 };
+
+constexpr int32_t kFailed = 0, kFrame = 1, kEnd = 2;
+
+FrameState state_of(const lod::Camera& c, int32_t index) {
+  FrameState s;
+  s.ok = kFrame, s.width = c.width, s.height = c.height_px, s.index = index;
+  s.lon = c.lon, s.lat = c.lat, s.height_m = c.height, s.heading = c.heading, s.pitch = c.pitch;
+  s.roll = c.roll, s.fov_y = c.fov_y;
+  return s;
+}
+
+lod::Camera camera_of(const FrameState& s) {
+  lod::Camera c;
+  c.lon = s.lon, c.lat = s.lat, c.height = s.height_m, c.heading = s.heading;
+  c.pitch = s.pitch, c.roll = s.roll, c.fov_y = s.fov_y, c.width = s.width;
+  c.height_px = s.height;
+  return c;
+}
 
 // Per-rank figures, gathered on rank 0 for --stats.
 struct RankStats {
@@ -87,42 +109,107 @@ class Run {
       setup->height = wall->virtual_height();
       wall_ = *wall;
     }
-    if (!args_.get("--camera") == !args_.get("--look-at")) {
+    const bool path = args_.get("--path").has_value();
+    if (!path && !args_.get("--camera") == !args_.get("--look-at")) {
       return same_everywhere("render: give exactly one of --camera and --look-at");
     }
-    // Rank 0 holds the camera and sends the frame's state to everyone.
-    FrameState state;
+    // Rank 0 holds the cameras (a still's, or a path's frames) and sends
+    // each frame's state to everyone.
+    std::vector<lod::Camera> cameras;
     if (comm_.rank() == 0) {
-      auto camera = parse_camera(args_, *setup);
-      if (camera) {
-        state = {1,
-                 camera->width,
-                 camera->height_px,
-                 camera->lon,
-                 camera->lat,
-                 camera->height,
-                 camera->heading,
-                 camera->pitch,
-                 camera->roll,
-                 camera->fov_y};
+      auto made = path ? path_cameras(*setup) : still_camera(*setup);
+      if (made) {
+        cameras = std::move(*made);
       } else {
-        error_ = camera.error().message;
+        error_ = made.error().message;
       }
     }
-    if (auto st = comm_.broadcast(parallel::bytes_of(state), 0); !st)
-      return fatal(st.error().message);
-    if (!state.ok) return comm_.rank() == 0 ? report_error(error_) : 1;
-    lod::Camera camera;
-    camera.lon = state.lon, camera.lat = state.lat, camera.height = state.height_m;
-    camera.heading = state.heading, camera.pitch = state.pitch, camera.roll = state.roll;
-    camera.fov_y = state.fov_y, camera.width = state.width, camera.height_px = state.height;
-    auto whole = lod::make_view(camera);
-    if (!whole) return same_everywhere(whole.error().message);
-    if (auto st = frame(*setup, *whole); !st) return fatal(st.error().message);
+    auto renderer = start(*setup);
+    for (size_t i = 0;; ++i) {
+      FrameState state;
+      if (comm_.rank() == 0) {
+        if (!error_.empty() || !renderer) {
+          state.ok = kFailed;
+        } else if (i < cameras.size()) {
+          state = state_of(cameras[i], static_cast<int32_t>(i));
+        } else {
+          state.ok = kEnd;
+        }
+      }
+      if (auto st = comm_.broadcast(parallel::bytes_of(state), 0); !st) {
+        return fatal(st.error().message);
+      }
+      if (state.ok == kEnd) break;
+      if (state.ok == kFailed) {
+        if (comm_.rank() != 0) return 1;
+        return report_error(!error_.empty() ? error_ : renderer.error().message);
+      }
+      if (!renderer) return fatal(renderer.error().message);
+      auto whole = lod::make_view(camera_of(state));
+      if (!whole) return fatal(whole.error().message);
+      if (auto st = frame(*setup, **renderer, *whole, path ? state.index : -1); !st) {
+        return fatal(st.error().message);
+      }
+    }
+    if (comm_.rank() == 0) write_summary();
     return 0;
   }
 
  private:
+  Result<std::vector<lod::Camera>> still_camera(const RenderSetup& setup) {
+    const lod::Camera camera = RELIEF_TRY(parse_camera(args_, setup));
+    RELIEF_CHECK(lod::make_view(camera));
+    return std::vector<lod::Camera>{camera};
+  }
+
+  // The path's frames at --fps (default the path's), as `relief render --path`.
+  Result<std::vector<lod::Camera>> path_cameras(const RenderSetup& setup) {
+    const view::PathFile file = RELIEF_TRY(view::read_path_file(
+        *args_.get("--path"), [&](const std::string& where, const std::vector<double>& values) {
+          return camera_from_values(where, values, setup);
+        }));
+    double fps = file.fps;
+    if (auto f = RELIEF_TRY(args_.get_double("--fps"))) {
+      if (!(*f > 0 && *f <= 1000)) return fail("--fps: must be in (0, 1000]");
+      fps = *f;
+    }
+    const std::vector<lod::Keyframe>& keys = file.keyframes;
+    const double count = std::floor((keys.back().time - keys.front().time) * fps + 1e-9) + 1;
+    if (!(count <= kMaxPathFrames)) {
+      return fail(fmt::format("{}: {:.6g} frames, more than {} under --parallel",
+                              *args_.get("--path"), count, kMaxPathFrames));
+    }
+    std::vector<lod::Camera> cameras;
+    for (size_t i = 0; i < static_cast<size_t>(count); ++i) {
+      cameras.push_back(lod::camera_at(keys, keys.front().time + static_cast<double>(i) / fps));
+    }
+    std::error_code ec;
+    std::filesystem::create_directories(*args_.get("--output"), ec);
+    if (ec)
+      return fail(*args_.get("--output") + ": cannot create the frame directory: " + ec.message());
+    return cameras;
+  }
+
+  // Every rank's GL context and renderer (a failure here is this rank's).
+  Result<std::unique_ptr<parallel::FrameRenderer>> start(RenderSetup& setup) {
+    view::SceneOptions so = scene_options(setup);
+    so.interactive = false;
+    so.loader.memory_budget = uint64_t{512} << 20;
+    context_ = RELIEF_TRY(render::GlContext::create_headless());
+    return parallel::FrameRenderer::create(setup.store, setup.imagery ? &*setup.imagery : nullptr,
+                                           so);
+  }
+
+  // Where a frame (or a display's part of it) goes: -o for a still, DIR/frame_NNNNN.png
+  // for a path; walls add _rR_cC.
+  std::string output(int frame_index, int display) const {
+    std::string out = *args_.get("--output");
+    if (frame_index >= 0) {
+      out = (std::filesystem::path(out) / fmt::format("frame_{:05d}.png", frame_index)).string();
+    }
+    return display >= 0 ? display_file(out, wall_, display) : out;
+  }
+
   int same_everywhere(const std::string& message) {
     return comm_.rank() == 0 ? report_error(message) : 1;
   }
@@ -135,17 +222,13 @@ class Run {
     comm_.abort(1);
   }
 
-  Status frame(RenderSetup& setup, const lod::View& whole) {
-    view::SceneOptions so = scene_options(setup);
-    so.interactive = false;
-    so.loader.memory_budget = uint64_t{512} << 20;
-    auto context = RELIEF_TRY(render::GlContext::create_headless());
-    auto renderer = RELIEF_TRY(parallel::FrameRenderer::create(
-        setup.store, setup.imagery ? &*setup.imagery : nullptr, so));
+  Status frame(RenderSetup& setup, parallel::FrameRenderer& renderer_ref, const lod::View& whole,
+               int frame_index) {
+    parallel::FrameRenderer* renderer = &renderer_ref;
     RankStats stats;
-    auto start = Clock::now();
+    auto began = Clock::now();
     RELIEF_CHECK(renderer->select(whole));
-    stats.select_ms = ms_since(start);
+    stats.select_ms = ms_since(began);
 
     const int n = comm_.size(), me = comm_.rank();
     std::vector<lod::PixelRect> tiles;
@@ -169,18 +252,17 @@ class Run {
     const int w = view.window.empty() ? whole.width : view.window.width;
     const int h = view.window.empty() ? whole.height : view.window.height;
     auto target = RELIEF_TRY(render::make_offscreen_target(w, h));
-    start = Clock::now();
+    began = Clock::now();
     const render::FrameStats drawn = RELIEF_TRY(renderer->draw(view, keep, *target));
     parallel::Layer layer{w, h, RELIEF_TRY(target->read_rgba()), {}};
     if (mode_.kind == ParallelMode::Kind::sort_last) layer.depth = RELIEF_TRY(target->read_depth());
-    stats.render_ms = ms_since(start);
+    stats.render_ms = ms_since(began);
     stats.quads = drawn.quads;
     stats.triangles = drawn.triangles;
 
     inject_fault(me);
-    start = Clock::now();
+    began = Clock::now();
     const uint64_t bytes_before = comm_.bytes_sent();
-    const std::string out = *args_.get("--output");
     std::vector<uint8_t> image;
     if (mode_.kind == ParallelMode::Kind::sort_last) {
       image = RELIEF_TRY(parallel::depth_composite(comm_, layer));
@@ -188,12 +270,12 @@ class Run {
       image =
           RELIEF_TRY(parallel::gather_tiles(comm_, layer.rgba, tiles, whole.width, whole.height));
     } else {
-      RELIEF_CHECK(write_png(display_file(out, wall_, me), layer.rgba, w, h));
+      RELIEF_CHECK(write_png(output(frame_index, me), layer.rgba, w, h));
     }
-    stats.composite_ms = ms_since(start);
+    stats.composite_ms = ms_since(began);
     stats.bytes_sent = comm_.bytes_sent() - bytes_before;
     if (me == 0 && mode_.kind != ParallelMode::Kind::wall) {
-      RELIEF_CHECK(write_png(out, image, whole.width, whole.height));
+      RELIEF_CHECK(write_png(output(frame_index, -1), image, whole.width, whole.height));
     }
     return report(stats, whole);
   }
@@ -224,25 +306,48 @@ class Run {
                        {"bytes_sent", s.bytes_sent}});
     }
     const double imbalance = parallel::imbalance(triangles);
-    if (auto path = args_.get("--stats")) {
-      const nlohmann::json stats = {{"mode", parallel::to_string(mode_)},
-                                    {"ranks", ranks},
-                                    {"width", whole.width},
-                                    {"height", whole.height},
-                                    {"triangle_imbalance", imbalance}};
-      RELIEF_CHECK(write_json(*path, stats.dump(1)));
-    }
-    std::printf("wrote %s: %dx%d, %s on %d ranks, triangles per rank max/mean - 1 = %.3f\n",
-                args_.get("--output")->c_str(), whole.width, whole.height,
-                parallel::to_string(mode_).c_str(), n, imbalance);
+    frames_.push_back({{"ranks", ranks}, {"triangle_imbalance", imbalance}});
+    width_ = whole.width, height_ = whole.height;
     return {};
   }
 
+  // Rank 0: --stats (a still's ranks, or every frame's) and the closing line.
+  void write_summary() {
+    double worst = 0;
+    for (const nlohmann::json& f : frames_) {
+      worst = std::max(worst, f["triangle_imbalance"].get<double>());
+    }
+    if (auto path = args_.get("--stats")) {
+      nlohmann::json stats = {{"mode", parallel::to_string(mode_)},
+                              {"ranks_count", comm_.size()},
+                              {"width", width_},
+                              {"height", height_}};
+      if (args_.get("--path")) {
+        stats["frames"] = frames_;
+      } else {
+        stats["ranks"] = frames_.at(0)["ranks"];
+        stats["triangle_imbalance"] = frames_.at(0)["triangle_imbalance"];
+      }
+      if (auto st = write_json(*path, stats.dump(1)); !st) {
+        fatal(st.error().message);
+      }
+    }
+    std::printf(
+        "wrote %s: %zu frame(s) of %dx%d, %s on %d ranks, triangles per rank max/mean - 1 <= "
+        "%.3f\n",
+        args_.get("--output")->c_str(), frames_.size(), width_, height_,
+        parallel::to_string(mode_).c_str(), comm_.size(), worst);
+  }
+
+  static constexpr double kMaxPathFrames = 100000;
   const Args& args_;
   const ParallelMode& mode_;
   Comm& comm_;
   parallel::Wall wall_;
   std::string error_;
+  std::unique_ptr<render::GlContext> context_;
+  std::vector<nlohmann::json> frames_;
+  int width_ = 0, height_ = 0;
 };
 
 }  // namespace
@@ -259,7 +364,6 @@ int render_parallel(const Args& args) {
       return report_error(fmt::format("--parallel-timeout: '{}' is not seconds in (0, 86400]", *t));
     }
   }
-  if (args.get("--path")) return report_error("--parallel: renders stills only (no --path yet)");
   auto comm = Comm::init(timeout);
   if (!comm) return report_error(comm.error().message);
   return Run(args, *mode, **comm).run();

@@ -137,6 +137,33 @@ TEST(Parallel, AWholeViewWindowIsTodaysImage) {
   EXPECT_EQ(differing_pixels(read_png(dir / "one.png", kWidth, kHeight), single()), 0u);
 }
 
+// A camera path, frame by frame, equals `relief render --path --mode
+// complete` (sort-last: exact), with per-frame figures in --stats.
+TEST(Parallel, APathEqualsTheSingleProcessFrames) {
+  ScratchDir dir("parallel_path");
+  const std::string path = data("paths/pyrenees-flyover.json");
+  std::vector<std::string> a = {
+      "render", Stores::pyrenees().string(), "--size", "160x120", "--path", path, "--fps", "1"};
+  std::vector<std::string> one = a, many = a;
+  one.insert(one.end(), {"--mode", "complete", "-o", (dir / "one").string()});
+  ASSERT_EQ(run_relief(one, kNoMesaLeakReport).exit_code, 0);
+  many.insert(many.end(), {"-o", (dir / "many").string(), "--parallel", "sort-last:active",
+                           "--stats", (dir / "stats.json").string()});
+  auto r = run_relief(many, mpirun(2));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  for (int i = 0; i < 4; ++i) {
+    const std::string name = fmt::format("frame_{:05d}.png", i);
+    EXPECT_EQ(differing_pixels(read_png(dir / "many" / name, 160, 120),
+                               read_png(dir / "one" / name, 160, 120)),
+              0u)
+        << name;
+  }
+  EXPECT_FALSE(fs::exists(dir / "many" / "frame_00004.png"));
+  const auto stats = nlohmann::json::parse(*read_text_file(dir / "stats.json"));
+  ASSERT_EQ(stats["frames"].size(), 4u);
+  EXPECT_EQ(stats["frames"][3]["ranks"].size(), 2u);
+}
+
 nlohmann::json stats_of(int ranks, const std::string& mode, ScratchDir& dir) {
   const fs::path stats = dir / (mode.substr(10) + ".json");
   auto r =
