@@ -322,6 +322,9 @@ class Run {
                               {"ranks_count", comm_.size()},
                               {"width", width_},
                               {"height", height_}};
+      if (mode_.kind == ParallelMode::Kind::sort_last) {
+        stats["compositing"] = parallel::compositing_method(comm_.size());
+      }
       if (args_.get("--path")) {
         stats["frames"] = frames_;
       } else {

@@ -43,7 +43,71 @@ void keep_nearer(Layer& into, const Layer& from) {
   }
 }
 
+namespace {
+
+bool power_of_two(int n) {
+  return n > 0 && (n & (n - 1)) == 0;
+}
+
+// Binary swap (power-of-two rank counts): in round r, ranks 2^r apart
+// split the rows they still hold; each keeps one half, sends the other and
+// composites what it receives. After log2 N rounds every rank holds 1/N of
+// the rows, composited over all ranks. Ranks pair as blocks of consecutive
+// ranks, lower block against higher, so the lowest rank still wins ties.
+Result<std::vector<uint8_t>> binary_swap(Comm& comm, const Layer& layer) {
+  const int n = comm.size(), me = comm.rank(), w = layer.width, h = layer.height;
+  // The rows each rank holds after the last round.
+  auto rows_of = [&](int rank) {
+    int lo = 0, hi = h;
+    for (int bit = 1; bit < n; bit <<= 1) {
+      const int mid = (lo + hi) / 2;
+      (rank & bit ? lo : hi) = mid;
+    }
+    return std::pair{lo, hi};
+  };
+  Layer held = layer;  // all rows at first; only [lo, hi) matter
+  int lo = 0, hi = h;
+  for (int bit = 1; bit < n; bit <<= 1) {
+    const int partner = me ^ bit, mid = (lo + hi) / 2;
+    const bool upper = me & bit;
+    const auto [keep0, keep1] = upper ? std::pair{mid, hi} : std::pair{lo, mid};
+    const auto [give0, give1] = upper ? std::pair{lo, mid} : std::pair{mid, hi};
+    const std::vector<std::byte> out = pack(held, give0, give1);
+    std::vector<std::byte> in(static_cast<size_t>(keep1 - keep0) * static_cast<size_t>(w) * 8);
+    const Comm::Send send{partner, out};
+    const Comm::Receive receive{partner, in};
+    RELIEF_CHECK(comm.exchange(std::span(&send, 1), std::span(&receive, 1)));
+    const Layer theirs = unpack(in, w, keep1 - keep0);
+    Layer mine = unpack(pack(held, keep0, keep1), w, keep1 - keep0);
+    Layer merged = upper ? theirs : mine;  // the lower block's pixels win ties
+    keep_nearer(merged, upper ? mine : theirs);
+    // Back into `held` at the kept rows.
+    const size_t first = static_cast<size_t>(keep0) * static_cast<size_t>(w);
+    std::memcpy(held.rgba.data() + first * 4, merged.rgba.data(), merged.rgba.size());
+    std::memcpy(held.depth.data() + first, merged.depth.data(), merged.depth.size() * 4);
+    lo = keep0, hi = keep1;
+  }
+  std::vector<lod::PixelRect> bands;
+  for (int k = 0; k < n; ++k) {
+    const auto [k0, k1] = rows_of(k);
+    bands.push_back({0, k0, w, k1 - k0});
+  }
+  const size_t first = static_cast<size_t>(lo) * static_cast<size_t>(w) * 4;
+  return gather_tiles(
+      comm,
+      std::span<const uint8_t>(held.rgba.data() + first,
+                               static_cast<size_t>(hi - lo) * static_cast<size_t>(w) * 4),
+      bands, w, h);
+}
+
+}  // namespace
+
+const char* compositing_method(int ranks) {
+  return power_of_two(ranks) ? "binary-swap" : "direct-send";
+}
+
 Result<std::vector<uint8_t>> depth_composite(Comm& comm, const Layer& layer) {
+  if (power_of_two(comm.size())) return binary_swap(comm, layer);
   const int n = comm.size(), me = comm.rank(), w = layer.width, h = layer.height;
   // Send every other rank its band; receive our band from every other rank.
   std::vector<std::vector<std::byte>> out(static_cast<size_t>(n)), in(static_cast<size_t>(n));

@@ -1,11 +1,13 @@
 #pragma once
 // Depth compositing of sort-last frames (seed 001 §4.1) and assembly of
-// sort-first tiles, over a Comm. Direct send: the image is cut into one band
-// of rows per rank; every rank sends each band of its colour and depth to the
-// band's rank, which keeps the nearest fragment of each pixel (reversed-Z:
-// the greatest depth; on a tie the lowest rank, whose quads come first), and
-// rank 0 gathers the bands. Each rank sends about (N - 1) / N of its colour
-// and depth plus one band of colour.
+// sort-first tiles, over a Comm. Every rank keeps, for the rows it
+// composites, the nearest fragment of each pixel (reversed-Z: the greatest
+// depth; on a tie the lowest rank, whose quads come first) and rank 0
+// gathers the rows' colour. Power-of-two rank counts use binary swap (log2 N
+// rounds of pairwise half exchanges, each rank sending about (N - 1) / N of
+// its colour and depth in total); others direct send (the image cut into one
+// band of rows per rank, each band sent to its rank at once: the same bytes,
+// N - 1 messages per rank).
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -24,8 +26,11 @@ struct Layer {
 };
 
 // Keeps in `into` the pixels of `from` that are nearer (strictly greater
-// depth), over rows [row0, row0 + rows) of both.
+// depth); both the same size.
 void keep_nearer(Layer& into, const Layer& from);
+
+// "binary-swap" or "direct-send": what depth_composite uses for `ranks`.
+const char* compositing_method(int ranks);
 
 // The composited image on rank 0 (empty elsewhere). Every rank passes a
 // layer of the same size.
