@@ -8,6 +8,7 @@
 #include "output_safety.h"
 #include "relief/lod/selection.h"
 #include "relief/render/terrain_renderer.h"
+#include "render_parallel.h"
 #include "render_path.h"
 #include "render_setup.h"
 
@@ -78,6 +79,11 @@ path options:
 movie options (-o MOVIE.mp4):
   --codec C          h264 (default; libx264, yuv420p: even --size only)
   --crf N            quality, 0 (lossless) to 51 (default 18; lower is better)
+parallel (under mpirun -n N; docs/parallel.md):
+  --parallel MODE    sort-first:h|v|grid (screen tiles), sort-last:block|quadtree|active
+                     (quads, depth-composited) or wall:WALL.json (one display per rank,
+                     written as OUT_rR_cC.png); stills and --path, complete frames
+  --parallel-timeout S  a rank that has not answered within S s fails the run (default 60)
 )";
 
 // What a render reads and writes, for the check that no output replaces an input.
@@ -219,7 +225,9 @@ int run_render(const std::vector<std::string>& argv) {
                            {"--events"},
                            {"--no-frames", "", false},
                            {"--codec"},
-                           {"--crf"}},
+                           {"--crf"},
+                           {"--parallel"},
+                           {"--parallel-timeout"}},
                           "render");
   if (!args) return report_error(args.error().message);
   if (!args->get("--output")) return report_error("render: -o is required");
@@ -233,6 +241,7 @@ int run_render(const std::vector<std::string>& argv) {
     }
   }
   if (auto safe = check_render_outputs(*args); !safe) return report_error(safe.error().message);
+  if (args->get("--parallel")) return render_parallel(*args);
   auto setup = parse_render_setup(*args);
   if (!setup) return report_error(setup.error().message);
   if (args->get("--path")) return render_path(*args, *setup);

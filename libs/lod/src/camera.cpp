@@ -109,4 +109,42 @@ Result<View> make_view(const Camera& c) {
   return v;
 }
 
+Result<View> with_window(const View& view, const PixelRect& w) {
+  if (w.empty() || w.x < 0 || w.y < 0 || w.x > view.width - w.width ||
+      w.y > view.height - w.height) {
+    return fail(fmt::format("window {}x{}+{}+{} is not inside the {}x{} view", w.width, w.height,
+                            w.x, w.y, view.width, view.height));
+  }
+  View v = view;
+  v.window = w;
+  return v;
+}
+
+std::array<Plane, 5> window_planes(const View& v) {
+  if (v.window.empty()) return v.planes;
+  // Normalised device coordinates of the window's sides (y up).
+  const double left = 2.0 * v.window.x / v.width - 1,
+               right = 2.0 * (v.window.x + v.window.width) / v.width - 1,
+               top = 1 - 2.0 * v.window.y / v.height,
+               bottom = 1 - 2.0 * (v.window.y + v.window.height) / v.height;
+  auto plane = [&](const Vec3& normal) { return Plane{normal, -dot(normal, v.eye)}; };
+  std::array<Plane, 5> p;
+  p[0] = v.planes[0];
+  p[1] = plane(normalize(v.right - v.forward * (left * v.tan_half_x)));
+  p[2] = plane(normalize(-v.right + v.forward * (right * v.tan_half_x)));
+  p[3] = plane(normalize(v.up - v.forward * (bottom * v.tan_half_y)));
+  p[4] = plane(normalize(-v.up + v.forward * (top * v.tan_half_y)));
+  return p;
+}
+
+bool outside(const std::array<Plane, 5>& planes, const Vec3& lo, const Vec3& hi) {
+  for (const Plane& pl : planes) {
+    // The box corner furthest along the plane normal.
+    const Vec3 far{pl.normal.x >= 0 ? hi.x : lo.x, pl.normal.y >= 0 ? hi.y : lo.y,
+                   pl.normal.z >= 0 ? hi.z : lo.z};
+    if (dot(pl.normal, far) + pl.d < 0) return true;
+  }
+  return false;
+}
+
 }  // namespace relief::lod

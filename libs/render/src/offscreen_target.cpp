@@ -47,6 +47,20 @@ class OffscreenTarget final : public RenderTarget {
     }
     return out;
   }
+  Result<std::vector<float>> read_depth() override {
+    std::vector<float> bottom_up(static_cast<size_t>(width_) * height_);
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, fbo_);
+    glPixelStorei(GL_PACK_ALIGNMENT, 4);
+    glReadPixels(0, 0, width_, height_, GL_DEPTH_COMPONENT, GL_FLOAT, bottom_up.data());
+    if (auto e = gl_error(); !e.empty()) return fail("reading the depth: " + e);
+    std::vector<float> out(bottom_up.size());
+    const size_t row = static_cast<size_t>(width_);
+    for (int y = 0; y < height_; ++y) {
+      std::copy_n(&bottom_up[static_cast<size_t>(height_ - 1 - y) * row], row,
+                  &out[static_cast<size_t>(y) * row]);
+    }
+    return out;
+  }
 
  private:
   int width_, height_;

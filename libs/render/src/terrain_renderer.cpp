@@ -148,8 +148,18 @@ class GlTerrainRenderer final : public TerrainRenderer {
     stats.prepare_seconds = std::chrono::duration<double>(Clock::now() - start).count();
     stats.pixels = static_cast<uint64_t>(target.width()) * static_cast<uint64_t>(target.height());
 
+    const lod::PixelRect& w = view.window;
+    if (!w.empty() && (target.width() != w.width || target.height() != w.height)) {
+      return fail(fmt::format("a {}x{} window drawn into a {}x{} target", w.width, w.height,
+                              target.width(), target.height()));
+    }
     const auto gpu_start = Clock::now();
     target.bind();
+    // A window of the view: the whole view's viewport, shifted so the window
+    // lands on the target. The projection stays the whole view's, so every
+    // vertex reaches the same clip coordinates as in the whole image and the
+    // windows of a view assemble into exactly its image.
+    if (!w.empty()) glViewport(-w.x, w.y + w.height - view.height, view.width, view.height);
     glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
     glEnable(GL_DEPTH_TEST);
     glDepthFunc(GL_GREATER);

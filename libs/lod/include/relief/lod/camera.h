@@ -27,6 +27,13 @@ struct Plane {
   double d = 0;  // dot(normal, p) + d >= 0 inside
 };
 
+// A rectangle of pixels, origin top-left.
+struct PixelRect {
+  int x = 0, y = 0, width = 0, height = 0;
+  bool empty() const { return width <= 0 || height <= 0; }
+  bool operator==(const PixelRect&) const = default;
+};
+
 struct View {
   Vec3 eye;                 // ECEF, metres
   Vec3 right, up, forward;  // unit basis, ECEF
@@ -35,6 +42,12 @@ struct View {
   int width = 0, height = 0;
   double near = 0.1;
   std::array<Plane, 5> planes;  // near, left, right, bottom, top (no far: reversed-Z, infinite)
+  // The part of the width x height view this view draws (a sort-first tile,
+  // one display of a wall), empty for all of it. Everything above stays the
+  // whole view's: its level of detail and its frustum, so that the tiles of
+  // a view assemble into exactly its image. The renderer draws the window
+  // into a target of the window's size (an off-axis sub-frustum).
+  PixelRect window;
 
   // Screen position (pixels, origin top-left) of an ECEF point in front of the eye.
   bool project(const Vec3& p, double& sx, double& sy) const;
@@ -42,5 +55,14 @@ struct View {
 
 // Fails for a camera inside the ellipsoid, a bad field of view or viewport.
 Result<View> make_view(const Camera& camera);
+
+// `view` drawing only `window`, which must lie inside it (a one-line error
+// naming the rectangle otherwise).
+Result<View> with_window(const View& view, const PixelRect& window);
+// The window's own (off-axis) frustum: near, left, right, bottom, top; the
+// whole view's planes without a window.
+std::array<Plane, 5> window_planes(const View& view);
+// Whether an ECEF box lies entirely outside these planes.
+bool outside(const std::array<Plane, 5>& planes, const Vec3& lo, const Vec3& hi);
 
 }  // namespace relief::lod

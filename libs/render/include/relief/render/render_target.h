@@ -20,6 +20,10 @@ class RenderTarget {
   virtual void bind() = 0;
   // RGBA8 pixels, top row first.
   virtual Result<std::vector<uint8_t>> read_rgba() = 0;
+  // Depth, top row first: reversed-Z, 1 at the near plane, 0 where nothing
+  // was drawn (sort-last compositing). Targets without a readable depth
+  // buffer fail.
+  virtual Result<std::vector<float>> read_depth() { return fail("this target has no depth"); }
 };
 
 // A headless GL context (EGL, surfaceless: Mesa's llvmpipe without a GPU, the

@@ -1,0 +1,62 @@
+#pragma once
+// One rank's renderer: the complete-frame path of view::Scene (every tile
+// read before drawing, so frames are deterministic), split in two so a rank
+// can draw a part of a frame. select() chooses and refines the quads of the
+// whole view, exactly as one process would (edge-mark refinement walks
+// across quads: every rank refines the whole selection, with the same
+// result); draw() draws the quads a mask keeps, through the whole view or
+// one of its windows. The union of the ranks' parts is the whole frame.
+//
+// Needs a current GL context; used on its thread only.
+#include <memory>
+#include <optional>
+#include <span>
+#include <vector>
+
+#include "relief/base/result.h"
+#include "relief/lod/camera.h"
+#include "relief/lod/refine.h"
+#include "relief/lod/selection.h"
+#include "relief/render/render_target.h"
+#include "relief/render/terrain_renderer.h"
+#include "relief/view/scene.h"
+
+namespace relief::parallel {
+
+class FrameRenderer {
+ public:
+  // `elevation` and `imagery` (may be null) must outlive the renderer;
+  // `options.interactive` is ignored (frames are complete).
+  static Result<std::unique_ptr<FrameRenderer>> create(const tiles::Store& elevation,
+                                                       const tiles::Store* imagery,
+                                                       const view::SceneOptions& options);
+  ~FrameRenderer();
+
+  // Selects (and refines) the quads of `whole`, a view without a window.
+  Status select(const lod::View& whole);
+  const lod::Selection& selection() const { return selection_; }
+  const lod::RefinedMesh* refined() const { return refined_ ? &*refined_ : nullptr; }
+  // Triangles of each selected quad.
+  std::vector<uint64_t> quad_triangles() const;
+  // Which selected quads can reach `view`'s window (conservative: their
+  // bounding boxes meet its sub-frustum); all of them without a window.
+  Result<std::vector<uint8_t>> quads_in_window(const lod::View& view);
+
+  // Draws the selected quads with keep[i] set through `view` (the selected
+  // view, or it with a window) into `target` (the window's size).
+  Result<render::FrameStats> draw(const lod::View& view, std::span<const uint8_t> keep,
+                                  render::RenderTarget& target);
+
+ private:
+  FrameRenderer(const tiles::Store& elevation, const view::SceneOptions& options);
+  bool edge_marks() const;
+  view::SceneOptions options_;
+  lod::MeshTopology mesh_;
+  std::unique_ptr<lod::TerrainModel> terrain_;
+  std::unique_ptr<render::TerrainRenderer> renderer_;
+  std::unique_ptr<lod::RefineCache> refine_cache_;
+  lod::Selection selection_;
+  std::optional<lod::RefinedMesh> refined_;
+};
+
+}  // namespace relief::parallel

@@ -1,0 +1,171 @@
+// libs/parallel without MPI: screen tiles, quad decompositions, walls,
+// the compositing rule and the views' windows.
+#include <gtest/gtest.h>
+
+#include <numeric>
+
+#include "relief/lod/camera.h"
+#include "relief/parallel/composite.h"
+#include "relief/parallel/decompose.h"
+#include "relief/parallel/wall.h"
+
+namespace relief::parallel {
+namespace {
+
+TEST(ScreenTiles, CoverTheViewExactlyOnce) {
+  for (ScreenSplit split : {ScreenSplit::horizontal, ScreenSplit::vertical, ScreenSplit::grid}) {
+    for (int ranks = 1; ranks <= 7; ++ranks) {
+      const auto tiles = screen_tiles(321, 239, split, ranks);
+      ASSERT_EQ(tiles.size(), size_t(ranks));
+      std::vector<int> covered(321 * 239, 0);
+      for (const lod::PixelRect& t : tiles) {
+        for (int y = t.y; y < t.y + t.height; ++y) {
+          for (int x = t.x; x < t.x + t.width; ++x) ++covered[y * 321 + x];
+        }
+      }
+      EXPECT_TRUE(std::all_of(covered.begin(), covered.end(), [](int c) { return c == 1; }));
+    }
+  }
+  // Four ranks on a wide view: a 2 x 2 grid; strips otherwise.
+  EXPECT_EQ(screen_tiles(320, 240, ScreenSplit::grid, 4)[3], (lod::PixelRect{160, 120, 160, 120}));
+  EXPECT_EQ(screen_tiles(320, 240, ScreenSplit::horizontal, 2)[1],
+            (lod::PixelRect{0, 120, 320, 120}));
+  EXPECT_EQ(screen_tiles(320, 240, ScreenSplit::vertical, 2)[1],
+            (lod::PixelRect{160, 0, 160, 240}));
+}
+
+TEST(ParallelMode, ParsesTheModesAndRejectsOthers) {
+  EXPECT_EQ(parse_parallel_mode("sort-first:grid")->screen, ScreenSplit::grid);
+  EXPECT_EQ(parse_parallel_mode("sort-last:quadtree")->quads, QuadSplit::quadtree);
+  EXPECT_EQ(parse_parallel_mode("wall:a.json")->wall_file, "a.json");
+  for (const char* bad : {"", "sort-first", "sort-first:x", "sort-last:", "wall:", "sort-middle"}) {
+    auto m = parse_parallel_mode(bad);
+    ASSERT_FALSE(m) << bad;
+    EXPECT_NE(m.error().message.find("--parallel"), std::string::npos);
+  }
+}
+
+// A front of quads of levels 13 and 14 over a one-degree extent, the western half
+// twice as fine (four times the quads).
+struct Front {
+  std::vector<geo::TileKey> keys;
+  std::vector<uint64_t> triangles;
+};
+Front uneven_front(const geo::GeoBox& extent) {
+  Front f;
+  for (int level : {13, 14}) {
+    // n x n tiles of 360 / n by 180 / n degrees.
+    const double n = 1u << level, w = 360 / n, h = 180 / n;
+    const auto x0 = uint32_t((extent.west + 180) / w) - 1,
+               x1 = uint32_t((extent.east + 180) / w) + 1;
+    const auto y0 = uint32_t((90 - extent.north) / h) - 1,
+               y1 = uint32_t((90 - extent.south) / h) + 1;
+    for (uint32_t y = y0; y <= y1; ++y) {
+      for (uint32_t x = x0; x <= x1; ++x) {
+        const geo::TileKey k{level, x, y};
+        const geo::GeoBox b = k.bounds();
+        const double cx = (b.west + b.east) / 2, cy = (b.south + b.north) / 2;
+        if (cy <= extent.south || cy >= extent.north || cx <= extent.west || cx >= extent.east) {
+          continue;
+        }
+        const bool west = cx < (extent.west + extent.east) / 2;
+        if ((level == 14) == west) f.keys.push_back(k), f.triangles.push_back(100 + (x % 7));
+      }
+    }
+  }
+  return f;
+}
+
+std::vector<uint64_t> per_rank(const Front& f, const std::vector<int>& owner, int ranks) {
+  std::vector<uint64_t> t(ranks, 0);
+  for (size_t i = 0; i < owner.size(); ++i) t[owner[i]] += f.triangles[i];
+  return t;
+}
+
+TEST(QuadSplit, ActivePatchesBalanceTrianglesWhereBlocksDoNot) {
+  const geo::GeoBox extent{1, 42, 2, 43};
+  const Front f = uneven_front(extent);
+  ASSERT_GT(f.keys.size(), 1000u);
+  for (int ranks : {2, 3, 4}) {
+    const auto active =
+        per_rank(f, assign_quads(f.keys, f.triangles, extent, QuadSplit::active, ranks), ranks);
+    const auto block =
+        per_rank(f, assign_quads(f.keys, f.triangles, extent, QuadSplit::block, ranks), ranks);
+    const auto quadtree =
+        per_rank(f, assign_quads(f.keys, f.triangles, extent, QuadSplit::quadtree, ranks), ranks);
+    EXPECT_LT(imbalance(active), 0.01) << ranks;
+    EXPECT_GT(imbalance(block), 0.2) << ranks;
+    // The quadtree's first cut is north/south: balanced by chance with two
+    // ranks, not with four.
+    if (ranks == 4) {
+      EXPECT_GT(imbalance(quadtree), 0.2);
+    }
+    // Every quad is drawn by exactly one rank.
+    EXPECT_EQ(std::accumulate(active.begin(), active.end(), uint64_t{0}),
+              std::accumulate(f.triangles.begin(), f.triangles.end(), uint64_t{0}));
+  }
+}
+
+TEST(Wall, DisplaysSkipTheBezelsAndTakeTheirOffsets) {
+  auto w = parse_wall(
+      R"({"rows": 2, "columns": 3, "display": [100, 80], "bezel": [10, 6],
+          "offsets": [[0,0],[0,0],[0,0],[0,0],[2,-3],[0,0]]})",
+      "wall.json");
+  ASSERT_TRUE(w) << w.error().message;
+  EXPECT_EQ(w->virtual_width(), 320);
+  EXPECT_EQ(w->virtual_height(), 166);
+  EXPECT_EQ(w->display(0), (lod::PixelRect{0, 0, 100, 80}));
+  EXPECT_EQ(w->display(2), (lod::PixelRect{220, 0, 100, 80}));
+  EXPECT_EQ(w->display(4), (lod::PixelRect{112, 83, 100, 80}));
+  for (const char* bad :
+       {"[]", R"({"rows": 2, "columns": 2})", R"({"rows": 0, "columns": 2, "display": [1, 1]})",
+        R"({"rows": 1, "columns": 2, "display": [10, 10], "bezel": [2]})",
+        R"({"rows": 1, "columns": 1, "display": [10, 10], "offsets": [[5, 0]]})"}) {
+    auto e = parse_wall(bad, "wall.json");
+    ASSERT_FALSE(e) << bad;
+    EXPECT_EQ(e.error().message.rfind("wall.json: ", 0), 0u) << e.error().message;
+  }
+}
+
+TEST(Composite, KeepsTheNearerFragmentAndTheFirstOnATie) {
+  Layer a{3, 1, {1, 1, 1, 255, 2, 2, 2, 255, 3, 3, 3, 255}, {0.5f, 0.0f, 0.25f}};
+  const Layer b{3, 1, {9, 9, 9, 255, 8, 8, 8, 255, 7, 7, 7, 255}, {0.25f, 0.1f, 0.25f}};
+  keep_nearer(a, b);
+  EXPECT_EQ(a.rgba, (std::vector<uint8_t>{1, 1, 1, 255, 8, 8, 8, 255, 3, 3, 3, 255}));
+  EXPECT_EQ(a.depth, (std::vector<float>{0.5f, 0.1f, 0.25f}));
+}
+
+TEST(ViewWindow, TheWholeWindowHasTheViewsFrustumAndTilesShrinkIt) {
+  lod::Camera c = lod::look_at(1.5, 42.5, 1500, 40000, 0, -30, 60, 320, 240);
+  const lod::View v = *lod::make_view(c);
+  const lod::View whole = *lod::with_window(v, {0, 0, 320, 240});
+  const auto planes = lod::window_planes(whole);
+  for (int i = 0; i < 5; ++i) {
+    EXPECT_NEAR(planes[i].normal.x, v.planes[i].normal.x, 1e-12);
+    EXPECT_NEAR(planes[i].normal.y, v.planes[i].normal.y, 1e-12);
+    EXPECT_NEAR(planes[i].normal.z, v.planes[i].normal.z, 1e-12);
+    EXPECT_NEAR(planes[i].d, v.planes[i].d, 1e-3);
+  }
+  // A point projected to pixel (200, 50) is inside the window holding it only.
+  const lod::Vec3 p = v.eye + (v.forward + v.right * (v.tan_half_x * (200.0 / 160 - 1)) +
+                               v.up * (v.tan_half_y * (1 - 50.0 / 120))) *
+                                  1000.0;
+  double sx = 0, sy = 0;
+  ASSERT_TRUE(v.project(p, sx, sy));
+  EXPECT_NEAR(sx, 200, 1e-6);
+  EXPECT_NEAR(sy, 50, 1e-6);
+  const auto inside = lod::window_planes(*lod::with_window(v, {190, 40, 20, 20}));
+  const auto beside = lod::window_planes(*lod::with_window(v, {211, 40, 20, 20}));
+  const auto below = lod::window_planes(*lod::with_window(v, {190, 51, 20, 20}));
+  EXPECT_FALSE(lod::outside(inside, p, p));
+  EXPECT_TRUE(lod::outside(beside, p, p));
+  EXPECT_TRUE(lod::outside(below, p, p));
+  // The error metric stays the whole view's.
+  EXPECT_EQ(lod::with_window(v, {0, 0, 10, 10})->pixels_per_radian, v.pixels_per_radian);
+  auto outside = lod::with_window(v, {300, 0, 30, 10});
+  ASSERT_FALSE(outside);
+  EXPECT_NE(outside.error().message.find("30x10+300+0"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace relief::parallel
