@@ -90,6 +90,41 @@ TEST_F(SceneTest, InteractiveFramesNeverWaitAndConvergeToTheCompleteFrame) {
   }
 }
 
+// The per-diamond errors of the tiles interactive frames refine were all
+// measured by the loader's threads (or at creation, level 0), none in a
+// frame, and the refined mesh is the one a complete frame measures inline.
+TEST_F(SceneTest, InteractiveFramesRefineWithDiamondErrorsPreparedOffTheRenderThread) {
+  auto live = scene(true);
+  ASSERT_TRUE(live);
+  uint64_t measured = 0, prepared = 0;
+  std::optional<FrameReport> last;
+  for (int frame = 0; frame < 64 && !(last && last->complete); ++frame) {
+    if (frame > 0) wait_idle(*live);
+    auto f = live->draw(kOblique, *target_);
+    ASSERT_TRUE(f) << f.error().message;
+    ASSERT_TRUE(f->refine);
+    measured += f->refine->tiles_measured;
+    prepared += f->refine->tiles_prepared;
+    last = *f;
+  }
+  ASSERT_TRUE(last && last->complete);
+  EXPECT_EQ(measured, 0u);
+  EXPECT_GT(prepared, 4u);  // level 0 and the tiles of the frames that followed
+  EXPECT_LE(prepared, last->refine_cache_tiles);
+
+  auto complete = scene(false);
+  ASSERT_TRUE(complete);
+  auto still = complete->draw(kOblique, *target_);
+  ASSERT_TRUE(still) << still.error().message;
+  EXPECT_GT(still->refine->tiles_measured, 0u);  // inline
+  EXPECT_EQ(still->refine->tiles_prepared, 0u);
+  ASSERT_TRUE(live->last_refined() && complete->last_refined());
+  EXPECT_EQ(live->last_selection().quads.size(), complete->last_selection().quads.size());
+  EXPECT_EQ(live->last_refined()->indices, complete->last_refined()->indices);
+  EXPECT_EQ(live->last_refined()->stats.marks_evaluated,
+            complete->last_refined()->stats.marks_evaluated);
+}
+
 TEST_F(SceneTest, APathPlaysOneFramePerPeriodOfTheClockAndReportsItsCut) {
   auto live = scene(true);
   ASSERT_TRUE(live);

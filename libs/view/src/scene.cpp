@@ -92,6 +92,8 @@ Result<std::unique_ptr<Scene>> Scene::create(const tiles::Store& elevation,
     lo.clock = &clock;
     impl->loader = RELIEF_TRY(stream::TileLoader::create(elevation, lo));
     impl->terrain = std::make_unique<lod::TerrainModel>(elevation, impl->mesh, *impl->loader);
+    // Diamond errors on the loader's threads, not in the frame that first draws a tile.
+    if (impl->refine_cache) impl->refine_cache->prepare_on_load(*impl->terrain);
     if (imagery) {
       lo.memory_budget = options.imagery_budget;
       impl->imagery_loader = RELIEF_TRY(stream::TileLoader::create(*imagery, lo));
