@@ -5,6 +5,7 @@
 #include <cmath>
 #include <optional>
 
+#include "relief/lod/split_feedback.h"
 #include "relief/stream/radius_pager.h"
 
 namespace relief::view {
@@ -43,6 +44,7 @@ struct Scene::Impl {
   std::unique_ptr<lod::TerrainModel> terrain;
   std::unique_ptr<render::TerrainRenderer> renderer;
   std::unique_ptr<lod::RefineCache> refine_cache;  // edge-mark frames
+  lod::SplitFeedback split_feedback;               // what the last refinements wanted split
   std::optional<lod::Camera> previous;             // of the last frame, unless cut
   lod::Selection last;
   std::optional<lod::RefinedMesh> last_refined;
@@ -114,7 +116,9 @@ Result<FrameReport> Scene::draw(const lod::Camera& camera, render::RenderTarget&
   report.camera = camera;
   const auto start = m.clock.now();
   m.terrain->begin_frame();
-  lod::Selection selection = RELIEF_TRY(lod::select_quads(view, *m.terrain, m.options.selection));
+  lod::SelectionOptions so = m.options.selection;
+  if (m.edge_marks()) so.also_split = m.split_feedback.for_selection(view, *m.terrain);
+  lod::Selection selection = RELIEF_TRY(lod::select_quads(view, *m.terrain, so));
   RELIEF_CHECK(m.prefetch_along_motion(camera));
   if (m.loader && m.options.radius_tiles > 0) {
     m.loader->begin_frame();  // the pager's requests replace the view's
@@ -129,6 +133,10 @@ Result<FrameReport> Scene::draw(const lod::Camera& camera, render::RenderTarget&
     ro.variant = m.options.refine_variant;
     ro.cache = m.refine_cache.get();
     refined = RELIEF_TRY(lod::refine(view, *m.terrain, selection, ro));
+    // What this frame's refinement wanted split, the next frames split. Not
+    // while data is missing: quads then stop coarse for want of their
+    // children's tiles (already requested), not for the selection's bound.
+    if (selection.stats.waiting == 0) m.split_feedback.record(view, *m.terrain, refined->stats);
     report.refine = refined->stats;
     report.refine_cache_tiles = m.refine_cache->tiles();
     report.refine_cache_bytes = m.refine_cache->bytes();
