@@ -125,6 +125,39 @@ TEST_F(SceneTest, InteractiveFramesRefineWithDiamondErrorsPreparedOffTheRenderTh
             complete->last_refined()->stats.marks_evaluated);
 }
 
+// A selection coarser than the refinement needs (quads stop splitting when
+// their level error projects to twice the threshold, not half of it): the
+// quads one frame's refinement wanted split, the next frame splits, and a
+// frame after that draws the same mesh.
+TEST_F(SceneTest, TheNextFrameSplitsTheQuadsTheRefinementWantedSplit) {
+  const lod::Camera low = lod::look_at(1.6, 42.4, 1200, 15000, 200, -15, 60, 160, 120);
+  SceneOptions o;
+  o.interactive = false;
+  o.mesh_level = 3;
+  o.selection.mode = lod::LodMode::edge_marks;
+  o.selection.level_error_share = 2.0;
+  auto s = Scene::create(testing::pyrenees_store(), nullptr, o, clock_);
+  ASSERT_TRUE(s) << s.error().message;
+  std::vector<FrameReport> frames;
+  for (int i = 0; i < 4; ++i) {
+    auto f = (*s)->draw(low, *target_);
+    ASSERT_TRUE(f) << f.error().message;
+    frames.push_back(*f);
+  }
+  EXPECT_FALSE(frames[0].refine->split_wanted.empty());
+  EXPECT_GT(frames[0].refine->unresolved + frames[0].refine->too_coarse, 0u);
+  EXPECT_GT(frames[1].selection.quads, frames[0].selection.quads);
+  const lod::RefineStats& last = *frames.back().refine;
+  EXPECT_TRUE(last.split_wanted.empty());
+  EXPECT_EQ(last.unresolved, 0u);
+  EXPECT_EQ(last.too_coarse, 0u);
+  EXPECT_EQ(frames[3].draw.triangles, frames[2].draw.triangles);
+  auto measured = (*s)->measure_last_frame(low, 4000);
+  ASSERT_TRUE(measured) << measured.error().message;
+  EXPECT_GT(measured->samples, 200u);
+  EXPECT_LE(measured->max_pixels, o.selection.pixel_error);
+}
+
 TEST_F(SceneTest, APathPlaysOneFramePerPeriodOfTheClockAndReportsItsCut) {
   auto live = scene(true);
   ASSERT_TRUE(live);
