@@ -62,6 +62,8 @@ struct Scene::Impl {
     return options.selection.mode == lod::LodMode::edge_marks && !options.full_resolution;
   }
 
+  bool feeds_back() const { return edge_marks() && loader && options.split_feedback; }
+
   // The brute-force reference has one vertex per finest sample.
   static int mesh_level(const tiles::Store& s, const SceneOptions& o) {
     return o.full_resolution ? static_cast<int>(std::log2(s.grid().height())) : o.mesh_level;
@@ -117,7 +119,7 @@ Result<FrameReport> Scene::draw(const lod::Camera& camera, render::RenderTarget&
   const auto start = m.clock.now();
   m.terrain->begin_frame();
   lod::SelectionOptions so = m.options.selection;
-  if (m.edge_marks()) so.also_split = m.split_feedback.for_selection(view, *m.terrain);
+  if (m.feeds_back()) so.also_split = m.split_feedback.for_selection(view, *m.terrain);
   lod::Selection selection = RELIEF_TRY(lod::select_quads(view, *m.terrain, so));
   RELIEF_CHECK(m.prefetch_along_motion(camera));
   if (m.loader && m.options.radius_tiles > 0) {
@@ -127,16 +129,22 @@ Result<FrameReport> Scene::draw(const lod::Camera& camera, render::RenderTarget&
   }
   m.terrain->end_frame();
   std::optional<lod::RefinedMesh> refined;
+  bool wants_more = false;  // the next frame splits more
   if (m.edge_marks()) {
     lod::RefineOptions ro;
     ro.pixel_error = m.options.selection.pixel_error;
     ro.variant = m.options.refine_variant;
     ro.cache = m.refine_cache.get();
     refined = RELIEF_TRY(lod::refine(view, *m.terrain, selection, ro));
-    // What this frame's refinement wanted split, the next frames split. Not
+    // SceneOptions::split_feedback, interactive frames: what this frame's
+    // refinement wanted split, the next frames split (complete frames stay a
+    // function of their camera). Not
     // while data is missing: quads then stop coarse for want of their
     // children's tiles (already requested), not for the selection's bound.
-    if (selection.stats.waiting == 0) m.split_feedback.record(view, *m.terrain, refined->stats);
+    if (m.feeds_back() && selection.stats.waiting == 0 && !refined->stats.split_wanted.empty()) {
+      m.split_feedback.record(view, *m.terrain, refined->stats);
+      wants_more = true;
+    }
     report.refine = refined->stats;
     report.refine_cache_tiles = m.refine_cache->tiles();
     report.refine_cache_bytes = m.refine_cache->bytes();
@@ -149,7 +157,7 @@ Result<FrameReport> Scene::draw(const lod::Camera& camera, render::RenderTarget&
   report.frame_seconds = seconds_between(start, m.clock.now());
   report.cpu_seconds = report.frame_seconds - report.draw.gpu_seconds;
   report.selection = selection.stats;
-  report.complete = selection.stats.waiting == 0;
+  report.complete = selection.stats.waiting == 0 && !wants_more;
   if (m.imagery_loader) {
     const stream::LoaderStats is = m.imagery_loader->stats();
     report.complete =
