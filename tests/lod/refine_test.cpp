@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <map>
 #include <random>
 #include <stdexcept>
@@ -21,6 +22,7 @@
 #include "relief/lod/mesh_evaluator.h"
 #include "relief/lod/refine.h"
 #include "relief/lod/refined_evaluator.h"
+#include "relief/lod/split_feedback.h"
 
 namespace relief::lod {
 namespace {
@@ -54,8 +56,9 @@ Terrain& scotland() {
 // the store's finest level, and with level errors, which refinement cannot
 // reduce, projecting to at most `level_error_share` of `pixel_error`.
 Selection select(Terrain& t, const View& view, double pixel_error, double level_error_share = 0.5,
-                 int max_level = -1) {
+                 int max_level = -1, std::function<bool(const geo::TileKey&)> also_split = {}) {
   SelectionOptions o;
+  o.also_split = std::move(also_split);
   o.max_level = max_level;
   o.pixel_error = pixel_error;
   o.mode = LodMode::edge_marks;
@@ -247,6 +250,43 @@ TEST(Refine, FewerTrianglesThanTheFullMeshAndFewerForLargerErrors) {
   const RefinedMesh m = refined(t, *view, s, 1.0, RefineVariant::kTopDown);
   EXPECT_LT(m.triangles() * 100, full_per_quad * s.quads.size());
   EXPECT_LT(m.triangles(), uint64_t{2} * view->width * view->height);
+}
+
+// A selection coarser than refinement needs (quads stop splitting only when
+// their level error projects over twice the threshold, not half of it):
+// the quads the refinement of one frame wants split are split by the
+// selection of the next (SplitFeedback), until nothing is unresolved and the
+// measured error is within the threshold; the same view keeps its splits.
+TEST(Refine, QuadsOneFrameWantedSplitAreSplitByTheNext) {
+  const double share = 2.0;
+  uint32_t wanted_at_first = 0;
+  for (const char* name : {"oblique", "low", "scotland"}) {
+    SCOPED_TRACE(name);
+    const Case& c = case_named(name);
+    Terrain& t = c.terrain();
+    auto view = make_view(c.camera);
+    ASSERT_TRUE(view);
+    SplitFeedback feedback;
+    Selection s = select(t, *view, c.pixel_error, share);
+    RefinedMesh m = refined(t, *view, s, c.pixel_error, RefineVariant::kTopDown);
+    wanted_at_first += static_cast<uint32_t>(m.stats.split_wanted.size());
+    for (int frame = 0; frame < 10 && !m.stats.split_wanted.empty(); ++frame) {
+      feedback.record(*view, t.terrain, m.stats);
+      s = select(t, *view, c.pixel_error, share, -1, feedback.for_selection(*view, t.terrain));
+      m = refined(t, *view, s, c.pixel_error, RefineVariant::kTopDown);
+    }
+    EXPECT_TRUE(m.stats.split_wanted.empty());
+    EXPECT_EQ(m.stats.unresolved, 0u);
+    EXPECT_EQ(m.stats.too_coarse, 0u);
+    const Measured e = measure(t, *view, s, m, 400);
+    EXPECT_GT(e.compared, 1000u);
+    EXPECT_LE(e.worst, c.pixel_error) << e.worst << " px over " << e.compared << " samples";
+    // A static view: the next frame draws the same mesh.
+    const Selection again =
+        select(t, *view, c.pixel_error, share, -1, feedback.for_selection(*view, t.terrain));
+    EXPECT_EQ(refined(t, *view, again, c.pixel_error, RefineVariant::kTopDown).indices, m.indices);
+  }
+  EXPECT_GT(wanted_at_first, 0u);  // the first frames were too coarse
 }
 
 // Every triangle edge is shared by exactly two triangles, except on the sides

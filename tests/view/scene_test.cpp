@@ -90,6 +90,82 @@ TEST_F(SceneTest, InteractiveFramesNeverWaitAndConvergeToTheCompleteFrame) {
   }
 }
 
+// The per-diamond errors of the tiles interactive frames refine were all
+// measured by the loader's threads (or at creation, level 0), none in a
+// frame, and the refined mesh is the one a complete frame measures inline.
+TEST_F(SceneTest, InteractiveFramesRefineWithDiamondErrorsPreparedOffTheRenderThread) {
+  auto live = scene(true);
+  ASSERT_TRUE(live);
+  uint64_t measured = 0, prepared = 0;
+  std::optional<FrameReport> last;
+  for (int frame = 0; frame < 64 && !(last && last->complete); ++frame) {
+    if (frame > 0) wait_idle(*live);
+    auto f = live->draw(kOblique, *target_);
+    ASSERT_TRUE(f) << f.error().message;
+    ASSERT_TRUE(f->refine);
+    measured += f->refine->tiles_measured;
+    prepared += f->refine->tiles_prepared;
+    last = *f;
+  }
+  ASSERT_TRUE(last && last->complete);
+  EXPECT_EQ(measured, 0u);
+  EXPECT_GT(prepared, 4u);  // level 0 and the tiles of the frames that followed
+  EXPECT_LE(prepared, last->refine_cache_tiles);
+
+  auto complete = scene(false);
+  ASSERT_TRUE(complete);
+  auto still = complete->draw(kOblique, *target_);
+  ASSERT_TRUE(still) << still.error().message;
+  EXPECT_GT(still->refine->tiles_measured, 0u);  // inline
+  EXPECT_EQ(still->refine->tiles_prepared, 0u);
+  ASSERT_TRUE(live->last_refined() && complete->last_refined());
+  EXPECT_EQ(live->last_selection().quads.size(), complete->last_selection().quads.size());
+  EXPECT_EQ(live->last_refined()->indices, complete->last_refined()->indices);
+  EXPECT_EQ(live->last_refined()->stats.marks_evaluated,
+            complete->last_refined()->stats.marks_evaluated);
+}
+
+// A selection coarser than the refinement needs (quads stop splitting when
+// their level error projects to twice the threshold, not half of it): the
+// quads an interactive frame's refinement wanted split, the next frame
+// splits; the view is complete once nothing is wanted, and then static.
+TEST_F(SceneTest, TheNextFrameSplitsTheQuadsTheRefinementWantedSplit) {
+  const lod::Camera low = lod::look_at(1.6, 42.4, 1200, 15000, 200, -15, 60, 160, 120);
+  SceneOptions o;
+  o.mesh_level = 3;
+  o.selection.mode = lod::LodMode::edge_marks;
+  o.selection.level_error_share = 2.0;
+  o.split_feedback = true;
+  auto s = Scene::create(testing::pyrenees_store(), nullptr, o, clock_);
+  ASSERT_TRUE(s) << s.error().message;
+  uint32_t fed_back = 0;
+  std::optional<FrameReport> last;
+  for (int frame = 0; frame < 64 && !(last && last->complete); ++frame) {
+    if (frame > 0) wait_idle(**s);
+    auto f = (*s)->draw(low, *target_);
+    ASSERT_TRUE(f) << f.error().message;
+    if (f->selection.waiting == 0) {
+      fed_back += static_cast<uint32_t>(f->refine->split_wanted.size());
+      EXPECT_EQ(f->complete, f->refine->split_wanted.empty());
+    }
+    last = *f;
+  }
+  ASSERT_TRUE(last && last->complete);
+  EXPECT_GT(fed_back, 0u);
+  EXPECT_TRUE(last->refine->split_wanted.empty());
+  EXPECT_EQ(last->refine->unresolved, 0u);
+  EXPECT_EQ(last->refine->too_coarse, 0u);
+  auto again = (*s)->draw(low, *target_);
+  ASSERT_TRUE(again) << again.error().message;
+  EXPECT_TRUE(again->complete);
+  EXPECT_EQ(again->draw.triangles, last->draw.triangles);
+  EXPECT_EQ(again->draw.geometry_bytes, 0u);
+  auto measured = (*s)->measure_last_frame(low, 4000);
+  ASSERT_TRUE(measured) << measured.error().message;
+  EXPECT_GT(measured->samples, 100u);
+  EXPECT_LE(measured->max_pixels, o.selection.pixel_error);
+}
+
 TEST_F(SceneTest, APathPlaysOneFramePerPeriodOfTheClockAndReportsItsCut) {
   auto live = scene(true);
   ASSERT_TRUE(live);

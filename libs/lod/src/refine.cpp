@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <list>
+#include <mutex>
 #include <optional>
 #include <unordered_map>
 
@@ -19,48 +20,105 @@
 namespace relief::lod {
 
 struct RefineCache::Impl {
+  std::mutex mutex;  // the render thread and the loader's threads
   uint64_t budget = 0, bytes = 0;
   std::list<geo::TileKey> lru;  // most recent first
   struct Entry {
     std::shared_ptr<const DiamondErrors> errors;
     std::list<geo::TileKey>::iterator at;
+    bool prepared = false;  // off the render thread, not used by a frame yet
   };
   std::unordered_map<geo::TileKey, Entry, geo::TileKeyHash> entries;
 
-  // The errors of the diamonds of data tile `key`; `measured` counts new ones.
-  Result<std::shared_ptr<const DiamondErrors>> get(TerrainModel& terrain, const MarkGrid& grid,
-                                                   const geo::TileKey& key, uint32_t& measured) {
-    if (auto it = entries.find(key); it != entries.end()) {
+  bool contains(const geo::TileKey& key) {
+    std::lock_guard lock(mutex);
+    return entries.contains(key);
+  }
+
+  void put(const geo::TileKey& key, std::shared_ptr<const DiamondErrors> errors, bool prepared) {
+    std::lock_guard lock(mutex);
+    if (auto it = entries.find(key); it != entries.end()) {  // measured twice: the same errors
       lru.splice(lru.begin(), lru, it->second.at);
-      return it->second.errors;
+      return;
     }
-    const TerrainModel::TilePtr tile = RELIEF_TRY(terrain.tile(key));
-    if (!tile) return std::shared_ptr<const DiamondErrors>{};
-    auto errors =
-        std::make_shared<const DiamondErrors>(measure_diamonds(grid, *tile, terrain.border()));
-    ++measured;
     bytes += errors->bytes();
     lru.push_front(key);
-    entries[key] = {errors, lru.begin()};
+    entries[key] = {std::move(errors), lru.begin(), prepared};
     while (bytes > budget && lru.size() > 1) {  // users hold what this frame needs
       auto old = entries.find(lru.back());
       bytes -= old->second.errors->bytes();
       entries.erase(old);
       lru.pop_back();
     }
+  }
+
+  // The errors of the diamonds of data tile `key`, counted in `stats` when
+  // a frame uses them for the first time.
+  Result<std::shared_ptr<const DiamondErrors>> get(TerrainModel& terrain, const MarkGrid& grid,
+                                                   const geo::TileKey& key, RefineStats& stats) {
+    {
+      std::lock_guard lock(mutex);
+      if (auto it = entries.find(key); it != entries.end()) {
+        lru.splice(lru.begin(), lru, it->second.at);
+        stats.tiles_prepared += it->second.prepared;
+        it->second.prepared = false;
+        return it->second.errors;
+      }
+    }
+    const TerrainModel::TilePtr tile = RELIEF_TRY(terrain.tile(key));
+    if (!tile) return std::shared_ptr<const DiamondErrors>{};
+    auto errors =
+        std::make_shared<const DiamondErrors>(measure_diamonds(grid, *tile, terrain.border()));
+    ++stats.tiles_measured;
+    put(key, errors, false);
     return errors;
   }
 };
 
-RefineCache::RefineCache(uint64_t budget_bytes) : impl_(std::make_unique<Impl>()) {
+namespace {
+
+// The grid of every quad of a store (its tiles' width: 2n cells of half a sample).
+MarkGrid grid_of(const TerrainModel& terrain) {
+  return MarkGrid(std::countr_zero(static_cast<uint32_t>(terrain.tile_width())));
+}
+
+}  // namespace
+
+RefineCache::RefineCache(uint64_t budget_bytes) : impl_(std::make_shared<Impl>()) {
   impl_->budget = budget_bytes;
 }
 RefineCache::~RefineCache() = default;
 uint64_t RefineCache::bytes() const {
+  std::lock_guard lock(impl_->mutex);
   return impl_->bytes;
 }
 size_t RefineCache::tiles() const {
+  std::lock_guard lock(impl_->mutex);
   return impl_->entries.size();
+}
+
+void RefineCache::prepare_on_load(TerrainModel& terrain) {
+  if (terrain.blocking() || !terrain.store()) return;
+  const MarkGrid grid = grid_of(terrain);
+  const int border = terrain.border(), data_max = terrain.data_max_level();
+  // The hook runs on the loader's threads and may outlive this cache: it
+  // holds a weak pointer and does nothing once the cache is gone.
+  terrain.add_prepare([cache = std::weak_ptr<Impl>(impl_), grid, border, data_max](
+                          const geo::TileKey& key, const tiles::Raster& tile) {
+    if (key.level > data_max) return;
+    const std::shared_ptr<Impl> impl = cache.lock();
+    if (!impl || impl->contains(key)) return;
+    impl->put(key, std::make_shared<const DiamondErrors>(measure_diamonds(grid, tile, border)),
+              true);
+  });
+  // Tiles resident before the hook (the loader reads level 0 at creation).
+  for (const tiles::IndexEntry& e : terrain.store()->index(0).entries()) {
+    if (impl_->contains(e.key) || !terrain.available(e.key)) continue;
+    auto tile = terrain.tile(e.key);
+    if (!tile || !*tile) continue;  // refine() will say what is wrong
+    impl_->put(e.key, std::make_shared<const DiamondErrors>(measure_diamonds(grid, **tile, border)),
+               true);
+  }
 }
 
 namespace {
@@ -133,7 +191,7 @@ class Refiner {
         selection_(selection),
         o_(options),
         cache_(cache),
-        grid_(std::countr_zero(static_cast<uint32_t>(terrain.tile_width()))),
+        grid_(grid_of(terrain)),
         top_down_(options.variant == RefineVariant::kTopDown) {}
 
   Status prepare() {
@@ -255,7 +313,7 @@ class Refiner {
       }
     }
     if (const DataWindow w = terrain_.window(s.key); w.tile) {
-      q.errors = RELIEF_TRY(cache_.get(terrain_, grid_, *w.tile, stats_.tiles_measured));
+      q.errors = RELIEF_TRY(cache_.get(terrain_, grid_, *w.tile, stats_));
     }
     q.marks.reset(static_cast<uint8_t*>(std::calloc(grid_.count(), 1)));
     if (!q.marks) return fail("refine: out of memory for edge marks");

@@ -254,7 +254,8 @@ class Selector {
     }
     const Leaf leaf = RELIEF_TRY(assess(key));
     bool split = leaf.visible && key.level < deepest() &&
-                 (leaf.error_pixels > o_.pixel_error || leaf.split_for_samples);
+                 (leaf.error_pixels > o_.pixel_error || leaf.split_for_samples ||
+                  (view_ && o_.also_split && o_.also_split(key)));
     if (split) split = RELIEF_TRY(children_available(key));
     if (!split) {
       leaves_.set(key, leaf);

@@ -316,9 +316,9 @@ void TerrainModel::prepare_errors_on_load() {
   prepared_ = std::make_shared<PreparedErrors>();
   // The hook runs on the loader's threads and may outlive this model: it
   // holds copies of what it needs, never `this`.
-  provider_->set_prepare([prepared = prepared_, mesh = mesh_, border = border_,
-                          data_max = data_max_, max_level = max_level_, width = width_,
-                          height = height_](const geo::TileKey& key, const tiles::Raster& tile) {
+  own_prepare_ = [prepared = prepared_, mesh = mesh_, border = border_, data_max = data_max_,
+                  max_level = max_level_, width = width_,
+                  height = height_](const geo::TileKey& key, const tiles::Raster& tile) {
     if (key.level > data_max) return;
     std::vector<std::pair<geo::TileKey, double>> errors;
     if (key.level < data_max) {  // the quad of the tile alone, against its full mesh
@@ -339,7 +339,22 @@ void TerrainModel::prepare_errors_on_load() {
     std::lock_guard lock(prepared->mutex);
     if (prepared->errors.size() > kMaxCachedQuads) prepared->errors.clear();
     prepared->errors.insert(errors.begin(), errors.end());
-  });
+  };
+  install_prepare();
+}
+
+void TerrainModel::add_prepare(TileProvider::Prepare prepare) {
+  if (!prepared_) return;  // a blocking provider: frames prepare what they use
+  more_prepare_.push_back(std::move(prepare));
+  install_prepare();
+}
+
+void TerrainModel::install_prepare() {
+  provider_->set_prepare(
+      [own = own_prepare_, more = more_prepare_](const geo::TileKey& key, const tiles::Raster& t) {
+        own(key, t);
+        for (const TileProvider::Prepare& p : more) p(key, t);
+      });
 }
 
 TerrainModel::~TerrainModel() {

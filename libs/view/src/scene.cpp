@@ -5,6 +5,7 @@
 #include <cmath>
 #include <optional>
 
+#include "relief/lod/split_feedback.h"
 #include "relief/stream/radius_pager.h"
 
 namespace relief::view {
@@ -43,6 +44,7 @@ struct Scene::Impl {
   std::unique_ptr<lod::TerrainModel> terrain;
   std::unique_ptr<render::TerrainRenderer> renderer;
   std::unique_ptr<lod::RefineCache> refine_cache;  // edge-mark frames
+  lod::SplitFeedback split_feedback;               // what the last refinements wanted split
   std::optional<lod::Camera> previous;             // of the last frame, unless cut
   lod::Selection last;
   std::optional<lod::RefinedMesh> last_refined;
@@ -59,6 +61,8 @@ struct Scene::Impl {
   bool edge_marks() const {
     return options.selection.mode == lod::LodMode::edge_marks && !options.full_resolution;
   }
+
+  bool feeds_back() const { return edge_marks() && loader && options.split_feedback; }
 
   // The brute-force reference has one vertex per finest sample.
   static int mesh_level(const tiles::Store& s, const SceneOptions& o) {
@@ -92,6 +96,8 @@ Result<std::unique_ptr<Scene>> Scene::create(const tiles::Store& elevation,
     lo.clock = &clock;
     impl->loader = RELIEF_TRY(stream::TileLoader::create(elevation, lo));
     impl->terrain = std::make_unique<lod::TerrainModel>(elevation, impl->mesh, *impl->loader);
+    // Diamond errors on the loader's threads, not in the frame that first draws a tile.
+    if (impl->refine_cache) impl->refine_cache->prepare_on_load(*impl->terrain);
     if (imagery) {
       lo.memory_budget = options.imagery_budget;
       impl->imagery_loader = RELIEF_TRY(stream::TileLoader::create(*imagery, lo));
@@ -112,7 +118,9 @@ Result<FrameReport> Scene::draw(const lod::Camera& camera, render::RenderTarget&
   report.camera = camera;
   const auto start = m.clock.now();
   m.terrain->begin_frame();
-  lod::Selection selection = RELIEF_TRY(lod::select_quads(view, *m.terrain, m.options.selection));
+  lod::SelectionOptions so = m.options.selection;
+  if (m.feeds_back()) so.also_split = m.split_feedback.for_selection(view, *m.terrain);
+  lod::Selection selection = RELIEF_TRY(lod::select_quads(view, *m.terrain, so));
   RELIEF_CHECK(m.prefetch_along_motion(camera));
   if (m.loader && m.options.radius_tiles > 0) {
     m.loader->begin_frame();  // the pager's requests replace the view's
@@ -121,12 +129,22 @@ Result<FrameReport> Scene::draw(const lod::Camera& camera, render::RenderTarget&
   }
   m.terrain->end_frame();
   std::optional<lod::RefinedMesh> refined;
+  bool wants_more = false;  // the next frame splits more
   if (m.edge_marks()) {
     lod::RefineOptions ro;
     ro.pixel_error = m.options.selection.pixel_error;
     ro.variant = m.options.refine_variant;
     ro.cache = m.refine_cache.get();
     refined = RELIEF_TRY(lod::refine(view, *m.terrain, selection, ro));
+    // SceneOptions::split_feedback, interactive frames: what this frame's
+    // refinement wanted split, the next frames split (complete frames stay a
+    // function of their camera). Not
+    // while data is missing: quads then stop coarse for want of their
+    // children's tiles (already requested), not for the selection's bound.
+    if (m.feeds_back() && selection.stats.waiting == 0 && !refined->stats.split_wanted.empty()) {
+      m.split_feedback.record(view, *m.terrain, refined->stats);
+      wants_more = true;
+    }
     report.refine = refined->stats;
     report.refine_cache_tiles = m.refine_cache->tiles();
     report.refine_cache_bytes = m.refine_cache->bytes();
@@ -139,7 +157,7 @@ Result<FrameReport> Scene::draw(const lod::Camera& camera, render::RenderTarget&
   report.frame_seconds = seconds_between(start, m.clock.now());
   report.cpu_seconds = report.frame_seconds - report.draw.gpu_seconds;
   report.selection = selection.stats;
-  report.complete = selection.stats.waiting == 0;
+  report.complete = selection.stats.waiting == 0 && !wants_more;
   if (m.imagery_loader) {
     const stream::LoaderStats is = m.imagery_loader->stats();
     report.complete =

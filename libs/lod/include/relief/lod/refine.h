@@ -34,8 +34,9 @@ namespace relief::lod {
 enum class RefineVariant : uint8_t { kTopDown, kBottomUp };
 
 // Per-diamond errors of data tiles (about 4 MB per tile of 512 x 256), kept
-// between frames within a byte budget, least recently used out. For one store;
-// used by one thread at a time (the render thread).
+// between frames within a byte budget, least recently used out. For one store.
+// refine() measures the tiles it misses on its own (the render) thread; with
+// prepare_on_load(), the loader's threads fill it too (it is locked).
 class RefineCache {
  public:
   explicit RefineCache(uint64_t budget_bytes = uint64_t{512} << 20);
@@ -45,11 +46,20 @@ class RefineCache {
   uint64_t bytes() const;
   size_t tiles() const;
 
+  // Interactive frames: the diamond errors of every tile `terrain`'s
+  // non-blocking provider decodes are measured on the loader's threads before
+  // the tile becomes resident, and those of the tiles already resident (level
+  // 0, loaded at creation) now, so refine() never measures a tile on the
+  // render thread unless the budget dropped it. Byte for byte the errors
+  // refine() would measure. Nothing for a blocking model (complete frames
+  // measure inline). The cache and the model may go in either order.
+  void prepare_on_load(TerrainModel& terrain);
+
   struct Impl;
   Impl& impl() { return *impl_; }
 
  private:
-  std::unique_ptr<Impl> impl_;
+  std::shared_ptr<Impl> impl_;  // shared with the loader's threads
 };
 
 struct RefineOptions {

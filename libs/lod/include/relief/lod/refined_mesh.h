@@ -34,7 +34,10 @@ struct RefineStats {
   // selection should split them (and refine again) to keep the bound with
   // the fewest triangles.
   std::vector<geo::TileKey> split_wanted;
-  uint32_t tiles_measured = 0;  // data tiles whose diamond errors were computed
+  // Data tiles whose diamond errors this frame used for the first time:
+  // measured on the render thread, or prepared by the loader's threads
+  // (RefineCache::prepare_on_load).
+  uint32_t tiles_measured = 0, tiles_prepared = 0;
   double seconds = 0;
 };
 

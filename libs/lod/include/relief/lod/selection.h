@@ -41,6 +41,10 @@ struct SelectionOptions {
   // The deepest level split to (< 0: the terrain's max_level()); edge-mark
   // refinement (refine.h) wants the store's finest, data_max_level().
   int max_level = -1;
+  // Quads to split even when their bound does not ask for it (as far as
+  // their data allows): those the refinement of earlier frames wanted split
+  // (lod/split_feedback.h). Null: none.
+  std::function<bool(const geo::TileKey&)> also_split;
   // Fill SelectedQuad::neighbours (for consumers that walk the mesh on the
   // GPU, like the seed's refinement); costs ~0.3 ms per 2000 quads.
   bool neighbour_indices = false;

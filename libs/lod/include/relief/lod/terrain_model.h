@@ -10,6 +10,7 @@
 #include <memory>
 #include <optional>
 #include <unordered_map>
+#include <vector>
 
 #include "relief/base/result.h"
 #include "relief/lod/mesh_topology.h"
@@ -117,6 +118,12 @@ class TerrainModel {
   };
   ErrorCounts error_counts() const { return error_counts_; }
 
+  // More work for each freshly decoded tile on the loader's threads, after
+  // the model's own exact errors (non-blocking providers; nothing otherwise):
+  // refine.h's diamond errors. The hook may outlive this model and its
+  // caller: it must hold what it uses (copies, weak pointers).
+  void add_prepare(TileProvider::Prepare prepare);
+
  private:
   // Per-quad bounds kept between frames (~200 bytes each).
   static constexpr size_t kMaxCachedQuads = 200000;
@@ -136,6 +143,9 @@ class TerrainModel {
   // on its own threads when it decodes the tile.
   void prepare_errors_on_load();
 
+  // Installs the model's own work and every add_prepare() hook as one.
+  void install_prepare();
+
   struct PreparedErrors;  // shared with the provider's threads
 
   const tiles::Store* store_;
@@ -148,6 +158,8 @@ class TerrainModel {
   std::unordered_map<geo::TileKey, double, geo::TileKeyHash> subtree_error_;
   std::unordered_map<geo::TileKey, QuadInfo, geo::TileKeyHash> quads_;
   std::shared_ptr<PreparedErrors> prepared_;  // null: blocking provider
+  TileProvider::Prepare own_prepare_;
+  std::vector<TileProvider::Prepare> more_prepare_;
   ErrorCounts error_counts_;
 };
 

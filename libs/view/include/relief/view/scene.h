@@ -39,6 +39,12 @@ struct SceneOptions {
   // again: they take ~8 times the bytes of the decoded tile).
   lod::SelectionOptions selection;
   lod::RefineVariant refine_variant = lod::RefineVariant::kTopDown;
+  // Edge marks, interactive frames: the quads a frame's refinement wanted
+  // split (RefineStats::split_wanted), the next frames' selection splits
+  // (lod/split_feedback.h), and a frame that wanted any is not complete.
+  // Off by default: such frames then depend on the frames before them and
+  // may draw more than the complete frame of their camera.
+  bool split_feedback = false;
   render::RenderOptions render;
   // Prefetch: while the camera moves, also request what a selection this
   // many frames ahead on the same motion would want (at lower priority).
