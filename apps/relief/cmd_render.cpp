@@ -173,6 +173,7 @@ int render_still(const Args& args, RenderSetup& setup) {
       stats["refine"] = {{"ms", frame->refine->seconds * 1e3},
                          {"marks_evaluated", frame->refine->marks_evaluated},
                          {"tiles_measured", frame->refine->tiles_measured},
+                         {"tiles_prepared", frame->refine->tiles_prepared},
                          {"too_coarse_quads", frame->refine->too_coarse},
                          {"unresolved_diamonds", frame->refine->unresolved}};
     }

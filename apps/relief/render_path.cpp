@@ -107,6 +107,7 @@ json refine_json(const view::FrameReport& r) {
   return {{"ms", s.seconds * 1e3},
           {"marks_evaluated", s.marks_evaluated},
           {"tiles_measured", s.tiles_measured},
+          {"tiles_prepared", s.tiles_prepared},
           {"tiles_cached", r.refine_cache_tiles},
           {"cache_bytes", r.refine_cache_bytes},
           {"too_coarse_quads", s.too_coarse},
