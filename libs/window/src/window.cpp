@@ -2,7 +2,10 @@
 
 #include <algorithm>
 #include <cassert>
+#include <chrono>
+#include <cstdlib>
 #include <string>
+#include <thread>
 
 #define GL_GLEXT_PROTOTYPES 1
 #include <GL/glcorearb.h>
@@ -154,7 +157,16 @@ Result<std::unique_ptr<Window>> Window::create(const WindowOptions& options) {
   assert(!g_open && "one Window at a time");
   glfwSetErrorCallback(on_glfw_error);
   g_last_error.clear();
-  if (!glfwInit()) {
+  // With a display named, a refused connection can be passing (an X server
+  // still tearing down the previous client under load, seen with Xvfb in CI):
+  // try a few times before telling the user there is no display.
+  bool initialised = glfwInit();
+  for (int attempt = 1; !initialised && std::getenv("DISPLAY") && attempt < 5; ++attempt) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(200 * attempt));
+    g_last_error.clear();
+    initialised = glfwInit();
+  }
+  if (!initialised) {
     return fail(fmt::format(
         "view: cannot open a window ({}); without a display, `relief render` draws stills and "
         "camera paths headless",
