@@ -226,13 +226,21 @@ class Run {
                int frame_index) {
     parallel::FrameRenderer* renderer = &renderer_ref;
     RankStats stats;
-    auto began = Clock::now();
-    RELIEF_CHECK(renderer->select(whole));
-    stats.select_ms = ms_since(began);
-
     const int n = comm_.size(), me = comm_.rank();
     std::vector<lod::PixelRect> tiles;
+    if (mode_.kind == ParallelMode::Kind::sort_first) {
+      tiles = parallel::screen_tiles(whole.width, whole.height, mode_.screen, n);
+    } else if (mode_.kind == ParallelMode::Kind::wall) {
+      for (int i = 0; i < n; ++i) tiles.push_back(wall_.display(i));
+    }
+    // Screen-space modes select what their window shows, so each rank reads
+    // only its part's tiles; sort-last ranks share one selection of the whole.
     lod::View view = whole;
+    if (!tiles.empty()) view = RELIEF_TRY(lod::with_window(whole, tiles[static_cast<size_t>(me)]));
+    auto began = Clock::now();
+    RELIEF_CHECK(renderer->select(view));
+    stats.select_ms = ms_since(began);
+
     std::vector<uint8_t> keep;
     if (mode_.kind == ParallelMode::Kind::sort_last) {
       std::vector<geo::TileKey> keys;
@@ -241,12 +249,6 @@ class Run {
           keys, renderer->quad_triangles(), setup.store.manifest().extent, mode_.quads, n);
       for (int o : owner) keep.push_back(o == me);
     } else {
-      if (mode_.kind == ParallelMode::Kind::sort_first) {
-        tiles = parallel::screen_tiles(whole.width, whole.height, mode_.screen, n);
-      } else {
-        for (int i = 0; i < n; ++i) tiles.push_back(wall_.display(i));
-      }
-      view = RELIEF_TRY(lod::with_window(whole, tiles[static_cast<size_t>(me)]));
       keep = RELIEF_TRY(renderer->quads_in_window(view));
     }
     const int w = view.window.empty() ? whole.width : view.window.width;

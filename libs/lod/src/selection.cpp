@@ -20,20 +20,17 @@ namespace {
 
 using geo::TileKey;
 
-bool outside_frustum(const Box& b, const View& v) {
-  for (const Plane& pl : v.planes) {
-    // The box corner furthest along the plane normal.
-    const Vec3 far{pl.normal.x >= 0 ? b.hi.x : b.lo.x, pl.normal.y >= 0 ? b.hi.y : b.lo.y,
-                   pl.normal.z >= 0 ? b.hi.z : b.lo.z};
-    if (dot(pl.normal, far) + pl.d < 0) return true;
-  }
-  return false;
+// A view with a window selects what its window shows (a rank of sort-first
+// rendering or one display of a wall loads only its part), with the whole
+// view's error metric.
+bool outside_frustum(const Box& b, const std::array<Plane, 5>& planes) {
+  return outside(planes, b.lo, b.hi);
 }
 
 class Selector {
  public:
   Selector(const View& v, TerrainModel& t, const SelectionOptions& o)
-      : view_(&v), terrain_(t), o_(o) {}
+      : view_(&v), planes_(window_planes(v)), terrain_(t), o_(o) {}
   // Without a view: every quad visible, split by `rule` (restricted_quadtree).
   Selector(TerrainModel& t, const SelectionOptions& o, std::function<bool(const TileKey&)> rule)
       : view_(nullptr), terrain_(t), o_(o), rule_(std::move(rule)) {}
@@ -101,7 +98,7 @@ class Selector {
     const HeightRange& range = info->range;
     const Box& box = info->box;
     Leaf leaf;
-    if (outside_frustum(box, view_ref) || hidden_by_horizon(box, range)) return leaf;
+    if (outside_frustum(box, planes_) || hidden_by_horizon(box, range)) return leaf;
     leaf.visible = true;
     if (!terrain_.blocking()) leaf.priority = priority(box);  // only loads need it
     // Brute force: the dataset alone, every quad down to the finest level.
@@ -199,7 +196,8 @@ class Selector {
         return false;
       }
       TerrainModel::QuadInfo* info = RELIEF_TRY(terrain_.quad(child));
-      if (outside_frustum(info->box, *view_) || hidden_by_horizon(info->box, info->range)) continue;
+      if (outside_frustum(info->box, planes_) || hidden_by_horizon(info->box, info->range))
+        continue;
       const double p = priority(info->box);
       terrain_.request(*w.tile, p);
       ++waiting_;
@@ -223,7 +221,7 @@ class Selector {
         const DataWindow w = terrain_.window(*n);
         if (!w.tile || terrain_.available(*w.tile)) continue;
         TerrainModel::QuadInfo* info = RELIEF_TRY(terrain_.quad(*n));
-        if (outside_frustum(info->box, *view_) || hidden_by_horizon(info->box, info->range))
+        if (outside_frustum(info->box, planes_) || hidden_by_horizon(info->box, info->range))
           continue;
         terrain_.request(*w.tile, cap * 0.25);
       }
@@ -237,7 +235,8 @@ class Selector {
       const DataWindow w = terrain_.window(child);
       if (!w.tile) continue;
       TerrainModel::QuadInfo* info = RELIEF_TRY(terrain_.quad(child));
-      if (outside_frustum(info->box, *view_) || hidden_by_horizon(info->box, info->range)) continue;
+      if (outside_frustum(info->box, planes_) || hidden_by_horizon(info->box, info->range))
+        continue;
       const double p = std::min(priority(info->box), cap * 0.5);
       terrain_.request(*w.tile, p);
       RELIEF_CHECK(want_below(child, p));
@@ -421,6 +420,7 @@ class Selector {
   }
 
   const View* view_;
+  std::array<Plane, 5> planes_{};  // the view's frustum, or its window's
   TerrainModel& terrain_;
   const SelectionOptions& o_;
   std::function<bool(const TileKey&)> rule_;

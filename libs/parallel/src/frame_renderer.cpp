@@ -40,9 +40,9 @@ Result<std::unique_ptr<FrameRenderer>> FrameRenderer::create(const tiles::Store&
   return r;
 }
 
-Status FrameRenderer::select(const lod::View& whole) {
+Status FrameRenderer::select(const lod::View& view) {
   terrain_->begin_frame();
-  selection_ = RELIEF_TRY(lod::select_quads(whole, *terrain_, options_.selection));
+  selection_ = RELIEF_TRY(lod::select_quads(view, *terrain_, options_.selection));
   terrain_->end_frame();
   refined_.reset();
   if (edge_marks()) {
@@ -50,7 +50,7 @@ Status FrameRenderer::select(const lod::View& whole) {
     ro.pixel_error = options_.selection.pixel_error;
     ro.variant = options_.refine_variant;
     ro.cache = refine_cache_.get();
-    refined_ = RELIEF_TRY(lod::refine(whole, *terrain_, selection_, ro));
+    refined_ = RELIEF_TRY(lod::refine(view, *terrain_, selection_, ro));
   }
   return {};
 }

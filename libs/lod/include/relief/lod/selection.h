@@ -81,6 +81,8 @@ struct Selection {
   SelectionStats stats;
 };
 
+// The quads `view` shows; a view with a window (camera.h) culls to its window
+// but measures errors as the whole view does.
 Result<Selection> select_quads(const View& view, TerrainModel& terrain,
                                const SelectionOptions& options);
 

@@ -2,10 +2,12 @@
 // One rank's renderer: the complete-frame path of view::Scene (every tile
 // read before drawing, so frames are deterministic), split in two so a rank
 // can draw a part of a frame. select() chooses and refines the quads of the
-// whole view, exactly as one process would (edge-mark refinement walks
-// across quads: every rank refines the whole selection, with the same
-// result); draw() draws the quads a mask keeps, through the whole view or
-// one of its windows. The union of the ranks' parts is the whole frame.
+// whole view, exactly as one process would (sort-last: every rank refines
+// the whole selection, with the same result), or of one window of it
+// (sort-first, walls: a rank reads only what its part shows; refinement at
+// the window's edges may differ from the whole view's, within the same error
+// bound); draw() draws the quads a mask keeps, through the whole view or one
+// of its windows. The union of the ranks' parts is the whole frame.
 //
 // Needs a current GL context; used on its thread only.
 #include <memory>
@@ -32,8 +34,9 @@ class FrameRenderer {
                                                        const view::SceneOptions& options);
   ~FrameRenderer();
 
-  // Selects (and refines) the quads of `whole`, a view without a window.
-  Status select(const lod::View& whole);
+  // Selects (and refines) the quads of `view`: the whole view, or only what
+  // its window shows (lod::select_quads), measured as the whole view does.
+  Status select(const lod::View& view);
   const lod::Selection& selection() const { return selection_; }
   const lod::RefinedMesh* refined() const { return refined_ ? &*refined_ : nullptr; }
   // Triangles of each selected quad.
