@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "operator_shaders.h"
+#include "relief/process/speckle.h"
 
 namespace relief::gpuprocess {
 namespace {
@@ -106,21 +107,6 @@ void main() {
 }
 )";
 
-// As wavelet.cpp (private there); the GPU = CPU tests catch any drift.
-constexpr double kBandNoise[] = {0.889, 0.200, 0.086};
-double digamma(double x) {
-  double r = 0;
-  for (; x < 6; x += 1) r -= 1 / x;
-  const double f = 1 / (x * x);
-  return r + std::log(x) - 0.5 / x - f * (1.0 / 12 - f * (1.0 / 120 - f / 252));
-}
-double trigamma(double x) {
-  double r = 0;
-  for (; x < 6; x += 1) r += 1 / (x * x);
-  const double f = 1 / (x * x);
-  return r + 1 / x + f / 2 + f / x * (1.0 / 6 - f * (1.0 / 30 - f / 42));
-}
-
 GLuint make_texture(GLenum format, int width, int height) {
   GLuint id = 0;
   glCreateTextures(GL_TEXTURE_2D, 1, &id);
@@ -198,15 +184,12 @@ Status WaveletPasses::run(const process::Params& params, const GlTexture& in, co
     glBindImageTexture(0, planes_[j], 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RG32UI);
     dispatch(cols, o + m, w - 2 * m, h - 2 * m);
   }
-  const double looks = params.at("looks"), k = params.at("k");
-  const double sigma = std::sqrt(trigamma(looks)) / 2;
-  const double bias = std::lgamma(looks + 0.5) - std::lgamma(looks) - 0.5 * std::log(looks) -
-                      0.5 * (digamma(looks) - std::log(looks));
-  double thresholds[3];
-  for (int j = 0; j < 3; ++j) thresholds[j] = k * sigma * kBandNoise[j];
+  const process::WaveletShrinkage shrink =
+      process::wavelet_shrinkage(params.at("looks"), params.at("k"));
   glProgramUniform1i(final_pass, glGetUniformLocation(final_pass, "levels"), levels);
-  glProgramUniform1dv(final_pass, glGetUniformLocation(final_pass, "threshold"), 3, thresholds);
-  glProgramUniform1d(final_pass, glGetUniformLocation(final_pass, "bias"), bias);
+  glProgramUniform1dv(final_pass, glGetUniformLocation(final_pass, "threshold"), 3,
+                      shrink.threshold);
+  glProgramUniform1d(final_pass, glGetUniformLocation(final_pass, "bias"), shrink.bias);
   glBindTextureUnit(0, in.id());
   for (int j = 0; j < 4; ++j) glBindTextureUnit(static_cast<GLuint>(1 + j), planes_[j]);
   glBindImageTexture(0, out.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_R32F);

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "kernels.h"
+#include "relief/process/speckle.h"
 
 namespace relief::process {
 namespace {
@@ -85,14 +86,20 @@ int wavelet_margin(int levels) {
   return 2 * ((1 << levels) - 1);
 }
 
-void wavelet_kernel(ConstView in, MutView out, const KernelContext& c, int y0, int y1) {
-  const int levels = c.ip("levels"), margin = wavelet_margin(levels);
-  const double looks = c.p("looks"), k = c.p("k");
+WaveletShrinkage wavelet_shrinkage(double looks, double k) {
   // ln A of an L-look amplitude: standard deviation sqrt(psi'(L)) / 2, and
   // ln(mean A) - E[ln A] = ln(Gamma(L + 1/2) / (Gamma(L) sqrt(L))) - (psi(L) - ln L) / 2.
   const double sigma = std::sqrt(trigamma(looks)) / 2;
-  const double bias = std::lgamma(looks + 0.5) - std::lgamma(looks) - 0.5 * std::log(looks) -
-                      0.5 * (digamma(looks) - std::log(looks));
+  WaveletShrinkage s;
+  for (int j = 0; j < 3; ++j) s.threshold[j] = k * sigma * kBandNoise[j];
+  s.bias = std::lgamma(looks + 0.5) - std::lgamma(looks) - 0.5 * std::log(looks) -
+           0.5 * (digamma(looks) - std::log(looks));
+  return s;
+}
+
+void wavelet_kernel(ConstView in, MutView out, const KernelContext& c, int y0, int y1) {
+  const int levels = c.ip("levels"), margin = wavelet_margin(levels);
+  const WaveletShrinkage shrink = wavelet_shrinkage(c.p("looks"), c.p("k"));
   // Amplitudes <= 0 have no logarithm: they are left out and returned as 0.
   std::vector<Plane> c_levels(1);
   Plane& c0 = c_levels[0];
@@ -117,9 +124,9 @@ void wavelet_kernel(ConstView in, MutView out, const KernelContext& c, int y0, i
       };
       double result = value(levels);
       for (int j = 1; j <= levels; ++j) {
-        result += soft(value(j - 1) - value(j), k * sigma * kBandNoise[j - 1]);
+        result += soft(value(j - 1) - value(j), shrink.threshold[j - 1]);
       }
-      out.at(x, y) = static_cast<float>(std::exp(result + bias));
+      out.at(x, y) = static_cast<float>(std::exp(result + shrink.bias));
     }
   }
 }

@@ -32,4 +32,14 @@ void gauss_filter(ConstView in, MutView out, const SpeckleParams& p, int y0, int
 // the column medians, Narendra 1981) that keeps large masks affordable.
 void median_filter(ConstView in, MutView out, const SpeckleParams& p, int y0, int y1);
 
+// The wavelet filter's shrinkage for `looks`-look amplitudes and threshold
+// factor k (seed 003 §2.3.3): the soft thresholds of a trous bands 1..3 on
+// log amplitudes, and the bias restoring the mean amplitude the log shifts.
+// Shared with the GPU operators (libs/gpuprocess), which must agree.
+struct WaveletShrinkage {
+  double threshold[3] = {};
+  double bias = 0;
+};
+WaveletShrinkage wavelet_shrinkage(double looks, double k);
+
 }  // namespace relief::process
