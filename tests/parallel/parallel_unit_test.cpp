@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <numeric>
+#include <random>
 
 #include "relief/lod/camera.h"
 #include "relief/parallel/composite.h"
@@ -133,6 +134,56 @@ TEST(Composite, KeepsTheNearerFragmentAndTheFirstOnATie) {
   keep_nearer(a, b);
   EXPECT_EQ(a.rgba, (std::vector<uint8_t>{1, 1, 1, 255, 8, 8, 8, 255, 3, 3, 3, 255}));
   EXPECT_EQ(a.depth, (std::vector<float>{0.5f, 0.1f, 0.25f}));
+}
+
+// A layer of w x h with sky (depth 0, the same colour everywhere) on about
+// half its pixels and depths from a few values, so ties occur.
+Layer random_layer(int w, int h, unsigned seed) {
+  std::mt19937 rng(seed);
+  Layer l{w, h, std::vector<uint8_t>(static_cast<size_t>(w) * h * 4), {}};
+  for (int i = 0; i < w * h; ++i) {
+    const bool sky = rng() % 2;
+    l.depth.push_back(sky ? 0.0f : static_cast<float>(1 + rng() % 4) / 8);
+    for (int c = 0; c < 4; ++c) {
+      l.rgba[static_cast<size_t>(i) * 4 + c] = sky ? uint8_t{200} : static_cast<uint8_t>(rng());
+    }
+  }
+  return l;
+}
+
+TEST(Composite, EncodedRowsMergeExactlyAsTheRawLayersAndSkipTheSky) {
+  for (unsigned seed = 1; seed <= 20; ++seed) {
+    const Layer mine = random_layer(37, 11, seed), theirs = random_layer(37, 11, seed + 100);
+    const int r0 = static_cast<int>(seed % 5), r1 = 11 - static_cast<int>(seed % 3);
+    const std::vector<std::byte> message = encode_rows(theirs, r0, r1);
+    // Only covered pixels travel: the run table plus 8 bytes each.
+    size_t covered = 0;
+    for (size_t i = static_cast<size_t>(r0) * 37; i < static_cast<size_t>(r1) * 37; ++i) {
+      covered += theirs.depth[i] != 0;
+    }
+    EXPECT_LT(message.size(), static_cast<size_t>(r1 - r0) * 37 * 8);
+    EXPECT_GE(message.size(), covered * 8);
+    for (const bool theirs_win : {false, true}) {
+      Layer merged = mine;
+      ASSERT_TRUE(merge_encoded(merged, r0, r1, message, theirs_win));
+      // The reference: raw layers, the tie winner as the base.
+      Layer expected = theirs_win ? theirs : mine;
+      keep_nearer(expected, theirs_win ? mine : theirs);
+      for (size_t i = static_cast<size_t>(r0) * 37; i < static_cast<size_t>(r1) * 37; ++i) {
+        ASSERT_EQ(merged.depth[i], expected.depth[i]) << seed << " pixel " << i;
+        for (size_t c = 0; c < 4; ++c) {
+          ASSERT_EQ(merged.rgba[i * 4 + c], expected.rgba[i * 4 + c]) << seed << " pixel " << i;
+        }
+      }
+    }
+  }
+  // Malformed messages are errors, not reads past the end.
+  Layer l = random_layer(8, 2, 7);
+  std::vector<std::byte> message = encode_rows(l, 0, 2);
+  EXPECT_FALSE(merge_encoded(l, 0, 1, message, false));  // runs cover 2 rows, not 1
+  message.pop_back();
+  EXPECT_FALSE(merge_encoded(l, 0, 2, message, false));
+  EXPECT_FALSE(merge_encoded(l, 0, 2, std::span(message.data(), 2), false));
 }
 
 TEST(ViewWindow, TheWholeWindowHasTheViewsFrustumAndTilesShrinkIt) {
