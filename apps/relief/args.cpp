@@ -41,6 +41,7 @@ Result<Args> Args::parse(const std::vector<std::string>& argv, const std::vector
     } else {
       return fail(fmt::format("{}: option {} needs a value", command, spec->name));
     }
+    args.all_values_[spec->name].push_back(args.values_[spec->name]);
   }
   return args;
 }
@@ -49,6 +50,11 @@ std::optional<std::string> Args::get(const std::string& name) const {
   auto it = values_.find(name);
   if (it == values_.end()) return std::nullopt;
   return it->second;
+}
+
+std::vector<std::string> Args::get_all(const std::string& name) const {
+  auto it = all_values_.find(name);
+  return it == all_values_.end() ? std::vector<std::string>{} : it->second;
 }
 
 Result<std::optional<int>> Args::get_int(const std::string& name, int lo, int hi) const {

@@ -25,13 +25,16 @@ class Args {
 
   const std::vector<std::string>& positional() const { return positional_; }
   bool has(const std::string& name) const { return values_.count(name) > 0; }
-  std::optional<std::string> get(const std::string& name) const;
+  std::optional<std::string> get(const std::string& name) const;  // the last one given
+  // Every value of an option given several times, in the order given.
+  std::vector<std::string> get_all(const std::string& name) const;
 
   Result<std::optional<int>> get_int(const std::string& name, int lo, int hi) const;
   Result<std::optional<double>> get_double(const std::string& name) const;
 
  private:
   std::map<std::string, std::string> values_;
+  std::map<std::string, std::vector<std::string>> all_values_;
   std::vector<std::string> positional_;
 };
 

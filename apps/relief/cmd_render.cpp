@@ -47,6 +47,10 @@ With -o MOVIE.mp4 the frames are complete and encoded into an H.264 MP4
 options:
   -o, --output PATH  PNG to write (a still), or directory for frame_NNNNN.png (a path),
                      or MOVIE.mp4 (a path as a movie)
+  --elevation STORE3 another elevation layer, fused with STORE at draw time
+                     (repeatable; same tile size and finest level)
+  --fuse first|mean  how elevation layers fuse: the first valid sample in the
+                     order given (default), or the mean of the valid ones
   --imagery STORE2   drape an imagery store; otherwise hypsometric colours with hillshade
   --size WxH         image size in pixels (default 1024x768)
   --fov DEG          vertical field of view (default 60)
@@ -92,6 +96,7 @@ Status check_render_outputs(const Args& args) {
   for (const char* name : {"--imagery", "--path"}) {
     if (auto p = args.get(name)) inputs.push_back(*p);
   }
+  for (const std::string& p : args.get_all("--elevation")) inputs.push_back(p);
   const bool frames = args.get("--path") && !is_movie_output(*args.get("--output"));
   std::vector<Output> outputs = {
       {"-o", *args.get("--output"), frames ? OutputKind::Directory : OutputKind::File}};
@@ -197,6 +202,8 @@ int run_render(const std::vector<std::string>& argv) {
   auto args = Args::parse(argv,
                           {{"--output", "-o"},
                            {"--imagery"},
+                           {"--elevation"},
+                           {"--fuse"},
                            {"--camera"},
                            {"--look-at"},
                            {"--path"},

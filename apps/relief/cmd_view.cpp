@@ -34,6 +34,10 @@ F12 screenshot (terrain only, PNG), Escape quit; the control mode takes the rest
   --camera LON,LAT,HEIGHT,HEADING,PITCH,ROLL   the start (as relief render)
   --look-at LON,LAT,HEIGHT,RANGE,HEADING,PITCH  (default: the whole store)
 options:
+  --elevation STORE3 another elevation layer, fused with STORE at draw time
+                     (repeatable; same tile size and finest level)
+  --fuse first|mean  how elevation layers fuse: the first valid sample in the
+                     order given (default), or the mean of the valid ones
   --imagery STORE2   drape an imagery store (a layer the panels switch on and off)
   --size WxH         window size in pixels (default 1024x768)
   --mode M           orbit (default), aircraft, walk or motorbike
@@ -73,6 +77,7 @@ Status check_view_outputs(const Args& args) {
   for (const char* name : {"--imagery", "--play"}) {
     if (auto p = args.get(name)) inputs.push_back(*p);
   }
+  for (const std::string& p : args.get_all("--elevation")) inputs.push_back(p);
   std::vector<Output> outputs;
   for (const char* name : {"--stats", "--record", "--screenshot"}) {
     if (auto p = args.get(name)) {
@@ -212,6 +217,8 @@ int run_view(const std::vector<std::string>& argv) {
   if (wants_help(argv)) return print_help(kHelp);
   auto args = Args::parse(argv,
                           {{"--imagery"},
+                           {"--elevation"},
+                           {"--fuse"},
                            {"--camera"},
                            {"--look-at"},
                            {"--size"},

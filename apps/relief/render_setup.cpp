@@ -7,6 +7,7 @@
 
 #include "relief/base/file_io.h"
 #include "relief/base/units.h"
+#include "relief/pipeline/fused_elevation.h"
 #include "relief/render/terrain_renderer.h"
 #include "relief/tiles/codec.h"
 
@@ -34,6 +35,28 @@ Result<uint64_t> byte_option(const Args& args, const char* name, uint64_t fallba
 }
 
 }  // namespace
+
+Result<tiles::Store> fuse_elevation_options(const Args& args, const std::string& first_name,
+                                            tiles::Store first, const StoreAccess& access) {
+  const std::vector<std::string> more = args.get_all("--elevation");
+  auto mode = pipeline::FuseMode::First;
+  if (auto text = args.get("--fuse")) {
+    if (*text == "mean") {
+      mode = pipeline::FuseMode::Blend;
+    } else if (*text != "first") {
+      return fail("--fuse: '" + *text + "' is none of first, mean");
+    }
+  }
+  if (more.empty()) return first;
+  std::vector<pipeline::ElevationLayer> layers;
+  layers.push_back({first_name, std::move(first)});
+  for (const std::string& path : more) {
+    layers.push_back(
+        {path, RELIEF_TRY(open_kind(path, tiles::DatasetKind::Elevation, "--elevation", access))});
+  }
+  ThreadExecutor executor;
+  return pipeline::fuse_elevation_layers(std::move(layers), mode, executor);
+}
 
 Result<RenderSetup> parse_render_setup(const Args& args) {
   if (args.positional().size() != 1) return fail("render: expected exactly one STORE");
@@ -86,6 +109,8 @@ Result<RenderSetup> parse_render_setup(const Args& args) {
   }
   s.store = RELIEF_TRY(open_kind(args.positional()[0], tiles::DatasetKind::Elevation, "STORE",
                                  access, &s.disk_cache));
+  s.store =
+      RELIEF_TRY(fuse_elevation_options(args, args.positional()[0], std::move(s.store), access));
   s.disk_cache_budget = access.cache_bytes;
   if (auto path = args.get("--imagery")) {
     s.imagery = RELIEF_TRY(open_kind(*path, tiles::DatasetKind::Imagery, "--imagery"));

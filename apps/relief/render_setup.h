@@ -30,6 +30,12 @@ struct RenderSetup {
 
 Result<RenderSetup> parse_render_setup(const Args& args);
 
+// `--elevation STORE` (repeatable) and `--fuse first|mean`: `first` alone, or
+// the elevation layers first, then each --elevation, fused at draw time
+// (pipeline/fused_elevation.h). Shared by `relief render` and `relief view`.
+Result<tiles::Store> fuse_elevation_options(const Args& args, const std::string& first_name,
+                                            tiles::Store first, const StoreAccess& access = {});
+
 // Scene options of a setup: selection (imagery sets the texture level), mesh,
 // GPU budget, drawing.
 view::SceneOptions scene_options(const RenderSetup& setup);

@@ -9,7 +9,9 @@
 #include <thread>
 
 #include "../ingest/built_stores.h"
+#include "../support/test_support.h"
 #include "relief/base/manual_clock.h"
+#include "relief/pipeline/fused_elevation.h"
 #include "relief/view/path_player.h"
 
 namespace relief::view {
@@ -30,12 +32,13 @@ class SceneTest : public ::testing::Test {
     target_ = std::move(*target);
   }
 
-  std::unique_ptr<Scene> scene(bool interactive, lod::LodMode mode = lod::LodMode::edge_marks) {
+  std::unique_ptr<Scene> scene(bool interactive, lod::LodMode mode = lod::LodMode::edge_marks,
+                               const tiles::Store* store = nullptr) {
     SceneOptions o;
     o.interactive = interactive;
     o.selection.mode = mode;
     o.mesh_level = 3;
-    auto s = Scene::create(testing::pyrenees_store(), nullptr, o, clock_);
+    auto s = Scene::create(store ? *store : testing::pyrenees_store(), nullptr, o, clock_);
     EXPECT_TRUE(s) << s.error().message;
     return s ? std::move(*s) : nullptr;
   }
@@ -123,6 +126,56 @@ TEST_F(SceneTest, InteractiveFramesRefineWithDiamondErrorsPreparedOffTheRenderTh
   EXPECT_EQ(live->last_refined()->indices, complete->last_refined()->indices);
   EXPECT_EQ(live->last_refined()->stats.marks_evaluated,
             complete->last_refined()->stats.marks_evaluated);
+}
+
+// Elevation layers fused at draw time (pipeline/fused_elevation.h): the
+// loader's threads fuse each tile and hand the fused raster to the
+// refinement's hook, so interactive frames refine with diamond errors of the
+// fused tiles and converge to the complete frame's mesh; over 42N, where the
+// layers meet, that mesh is not the first layer's alone.
+TEST_F(SceneTest, FusedLayersRefineWithDiamondErrorsOfTheFusedTiles) {
+  auto layer = [](const std::string& name, const std::string& file) -> const tiles::Store& {
+    ingest::BuildOptions o;
+    o.inputs = {testing::data(file)};
+    o.kind = tiles::DatasetKind::Elevation;
+    return testing::built_store(name, o);
+  };
+  const tiles::Store& n41 = layer("n41", "srtm/N41E001.hgt.zip");
+  std::vector<pipeline::ElevationLayer> layers;
+  layers.push_back({"n41", n41});
+  layers.push_back({"n42", layer("n42", "srtm/N42E001.hgt.zip")});
+  ThreadExecutor executor;
+  auto fused =
+      pipeline::fuse_elevation_layers(std::move(layers), pipeline::FuseMode::First, executor);
+  ASSERT_TRUE(fused) << fused.error().message;
+  const lod::Camera seam = lod::look_at(1.5, 42.0, 1000, 30000, 10, -35, 60, 160, 120);
+
+  auto live = scene(true, lod::LodMode::edge_marks, &*fused);
+  ASSERT_TRUE(live);
+  uint64_t measured = 0, prepared = 0;
+  std::optional<FrameReport> last;
+  for (int frame = 0; frame < 64 && !(last && last->complete); ++frame) {
+    if (frame > 0) wait_idle(*live);
+    auto f = live->draw(seam, *target_);
+    ASSERT_TRUE(f) << f.error().message;
+    measured += f->refine->tiles_measured;
+    prepared += f->refine->tiles_prepared;
+    last = *f;
+  }
+  ASSERT_TRUE(last && last->complete);
+  EXPECT_EQ(measured, 0u);
+  EXPECT_GT(prepared, 4u);
+
+  auto complete = scene(false, lod::LodMode::edge_marks, &*fused);
+  ASSERT_TRUE(complete);
+  ASSERT_TRUE(complete->draw(seam, *target_));
+  ASSERT_TRUE(live->last_refined() && complete->last_refined());
+  EXPECT_EQ(live->last_refined()->indices, complete->last_refined()->indices);
+
+  auto alone = scene(false, lod::LodMode::edge_marks, &n41);
+  ASSERT_TRUE(alone);
+  ASSERT_TRUE(alone->draw(seam, *target_));
+  EXPECT_NE(alone->last_refined()->indices, complete->last_refined()->indices);
 }
 
 // A selection coarser than the refinement needs (quads stop splitting when

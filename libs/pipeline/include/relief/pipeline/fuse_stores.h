@@ -10,13 +10,9 @@
 #include "relief/base/parallel.h"
 #include "relief/base/progress.h"
 #include "relief/base/result.h"
+#include "relief/pipeline/fuse_tiles.h"
 
 namespace relief::pipeline {
-
-enum class FuseMode {
-  Blend,  // weighted mean of the valid inputs
-  First,  // the first valid input in the order given (void filling)
-};
 
 struct FuseOptions {
   std::vector<std::filesystem::path> inputs;  // at least two

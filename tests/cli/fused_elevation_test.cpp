@@ -1,0 +1,124 @@
+// `relief render STORE --elevation STORE2 [--fuse first|mean]`: elevation
+// layers fused at draw time (docs/rendering.md). N41E001 and N42E001 built as
+// two stores and fused while drawing give the still of the store built from
+// both files; bad layers are one-line errors.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+
+#include "images.h"
+#include "test_support.h"
+
+namespace relief::testing {
+namespace {
+
+class FusedElevation : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new ScratchDir("fused_elevation");
+    for (auto [name, files] :
+         {std::pair<std::string, std::vector<std::string>>{"n41", {"srtm/N41E001.hgt.zip"}},
+          {"n42", {"srtm/N42E001.hgt.zip"}},
+          {"pair", {"srtm/N41E001.hgt.zip", "srtm/N42E001.hgt.zip"}}}) {
+      std::vector<std::string> args = {"build", "--kind", "elevation", "-q", "-o", path(name)};
+      for (const auto& f : files) args.push_back(data(f));
+      ASSERT_EQ(run_relief(args).exit_code, 0) << name;
+    }
+    ASSERT_EQ(run_relief({"build", "--kind", "imagery", "-q", "-o", path("rgb"),
+                          data("imagery/RGB.byte.tif")})
+                  .exit_code,
+              0);
+  }
+  static void TearDownTestSuite() {
+    delete dir_;
+    dir_ = nullptr;
+  }
+  static std::string path(const std::string& name) { return (dir_->path() / name).string(); }
+
+  static Image render(std::vector<std::string> stores, const std::string& camera,
+                      const std::string& out) {
+    std::vector<std::string> args = {"render"};
+    args.insert(args.end(), stores.begin(), stores.end());
+    for (const char* a : {"--look-at", camera.c_str(), "--size", "480x320"}) args.push_back(a);
+    args.push_back("-o");
+    args.push_back(path(out));
+    const RunResult r = run_relief(args, kNoMesaLeakReport);
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    return read_png(path(out), 480, 320);
+  }
+
+  static inline ScratchDir* dir_ = nullptr;
+};
+
+// The fused finest tiles are the pair's (the files overlap by one row at
+// 42°N with equal values); coarser tiles differ only next to 42°N, where the
+// pair's were averaged from both files and each layer's from its own (the
+// fused coarse tile takes N41's sample there, averaged over fewer finest
+// samples). So the frames agree but for a few pixels shaded from those rows.
+TEST_F(FusedElevation, TwoLayersDrawTheStillOfTheStoreBuiltFromBoth) {
+  struct Case {
+    std::string camera;
+    std::vector<std::string> layers;
+  };
+  // Oblique across 42N, first valid; straight down over both, the mean in
+  // the other order.
+  const Case cases[] = {
+      {"1.5,42.0,1000,60000,0,-40", {path("n41"), "--elevation", path("n42")}},
+      {"1.5,42.0,1000,150000,0,-89", {path("n42"), "--elevation", path("n41"), "--fuse", "mean"}},
+  };
+  for (const Case& c : cases) {
+    const Image built = render({path("pair")}, c.camera, "pair.png");
+    const Image fused = render(c.layers, c.camera, "fused.png");
+    size_t off = 0, off_more = 0;
+    for (size_t i = 0; i < built.rgba.size(); ++i) {
+      const int d = std::abs(int(built.rgba[i]) - int(fused.rgba[i]));
+      off += d > 0;
+      off_more += d > 1;
+    }
+    const double channels = 480.0 * 320 * 4;
+    EXPECT_LE(off / channels, 0.002) << c.camera << ": " << off << " channels differ";
+    EXPECT_LE(off_more / channels, 0.001) << c.camera << ": " << off_more << " off by > 1";
+  }
+}
+
+TEST_F(FusedElevation, BadLayersAreOneLineErrors) {
+  const std::string out = path("bad.png");
+  const std::string cam = "1.5,42.0,1000,60000,0,-40";
+  struct Case {
+    std::vector<std::string> args;
+    std::string needle;
+  };
+  const std::vector<Case> cases = {
+      {{path("n41"), "--elevation", path("rgb")}, "--elevation must be an elevation store"},
+      {{path("n41"), "--elevation", path("missing")}, "missing"},
+      {{path("n41"), "--elevation", path("n42"), "--fuse", "max"}, "--fuse: 'max' is none of"},
+  };
+  for (const Case& c : cases) {
+    std::vector<std::string> args = {"render"};
+    args.insert(args.end(), c.args.begin(), c.args.end());
+    for (const std::string& a : {std::string("--look-at"), cam, std::string("-o"), out}) {
+      args.push_back(a);
+    }
+    const RunResult r = run_relief(args, kNoMesaLeakReport);
+    EXPECT_NE(r.exit_code, 0);
+    EXPECT_TRUE(is_one_line_error(r, c.needle)) << r.err;
+    EXPECT_FALSE(std::filesystem::exists(out));
+  }
+}
+
+// Layers of different depths are not fused at draw time yet: said so.
+TEST_F(FusedElevation, LayersOfDifferentDepthsAreRefused) {
+  ASSERT_EQ(run_relief({"build", "--kind", "elevation", "-q", "-o", path("coarse"), "--max-level",
+                        "7", data("srtm/N42E001.hgt.zip")})
+                .exit_code,
+            0);
+  const RunResult r = run_relief({"render", path("n41"), "--elevation", path("coarse"), "--look-at",
+                                  "1.5,42.0,1000,60000,0,-40", "-o", path("depth.png")},
+                                 kNoMesaLeakReport);
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_TRUE(is_one_line_error(r, "finest level 7 differs from the first elevation layer's 10"))
+      << r.err;
+}
+
+}  // namespace
+}  // namespace relief::testing
