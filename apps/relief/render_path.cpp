@@ -199,8 +199,8 @@ int render_path(const Args& args, RenderSetup& setup, const Clock& clock) {
   if (!context) return report_error(context.error().message);
   auto target = render::make_offscreen_target(setup.width, setup.height);
   if (!target) return report_error(target.error().message);
-  auto scene =
-      view::Scene::create(setup.store, setup.imagery ? &*setup.imagery : nullptr, so, clock);
+  auto scene = view::Scene::create(elevation_of(setup), setup.imagery ? &*setup.imagery : nullptr,
+                                   so, clock);
   if (!scene) return report_error(scene.error().message);
   stream::TileLoader* loader = (*scene)->elevation_loader();
   stream::TileLoader* imagery_loader = (*scene)->imagery_loader();
