@@ -268,6 +268,11 @@ int render_path(const Args& args, RenderSetup& setup, const Clock& clock) {
                          {"repaired", d.repaired}};
     }
     if (imagery_loader) f["imagery_memory"] = loader_json(imagery_loader->stats());
+    if (!setup.textures.layers.empty()) {
+      f["texture_layers"] = {{"tiles_processed", frame.layer_tiles_processed},
+                             {"processing_ms", frame.processing_seconds * 1e3},
+                             {"misses", frame.texture_misses}};
+    }
     frames.push_back(std::move(f));
     progress->advance();
     if (!options->frames) return {};

@@ -253,6 +253,7 @@ class GlTerrainRenderer final : public TerrainRenderer {
     FrameStats stats;
     gl::Uploads uploads;
     slots_.begin_frame();
+    made_this_frame_ = 0;
     const uint64_t uploads_before = slots_.uploads(), evicted_before = slots_.evicted();
     const lod::MeshTopology& mesh = elevation_.mesh();
     records_.clear();
@@ -490,8 +491,9 @@ class GlTerrainRenderer final : public TerrainRenderer {
     }
     std::vector<lod::TilePtr> tiles(layers_.size());
     std::vector<TileKey> keys(layers_.size());
-    bool any = false, missing = false;
+    bool any = false, missing = false, interactive = false;
     for (size_t i = 0; i < layers_.size(); ++i) {
+      interactive = interactive || !layers_[i].tiles->blocking();
       const tiles::Store& store = *layers_[i].store;
       const tiles::Manifest& man = store.manifest();
       const int level = std::min(a.level, man.max_level);
@@ -508,6 +510,10 @@ class GlTerrainRenderer final : public TerrainRenderer {
     }
     made.empty = !any;
     if (!any || missing) return made;
+    // Interactive frames do not wait for processing either: past a few
+    // composites, the rest are made by the next frames (ancestors meanwhile).
+    if (interactive && made_this_frame_ >= kCompositesPerFrame) return made;
+    ++made_this_frame_;
     const auto start = Clock::now();
     const tiles::Store& ref = *layers_[reference_].store;
     const int width = ref.grid().width() + 2, height = ref.grid().height() + 2;
@@ -544,15 +550,17 @@ class GlTerrainRenderer final : public TerrainRenderer {
     return made;
   }
 
-  static constexpr int kMaxGridK = 11;  // 4097 x 2049 vertices per grid
+  static constexpr int kMaxGridK = 11;            // 4097 x 2049 vertices per grid
+  static constexpr int kCompositesPerFrame = 16;  // interactive frames
 
   lod::TerrainModel& elevation_;
   const tiles::Store* imagery_;
   std::unique_ptr<lod::TileProvider> owned_imagery_tiles_;
   std::vector<TextureLayer> layers_;  // texture layers, bottom first
   std::vector<std::unique_ptr<lod::TileProvider>> owned_layer_tiles_;
-  size_t reference_ = 0;  // the layer whose tiles the composites follow
-  uint32_t version_ = 0;  // of the layers' parameters
+  size_t reference_ = 0;     // the layer whose tiles the composites follow
+  uint32_t version_ = 0;     // of the layers' parameters
+  int made_this_frame_ = 0;  // composites made by the frame being prepared
   std::unique_ptr<gpuprocess::GpuProcessor> gpu_;
   std::unique_ptr<gpuprocess::Compositor> compositor_;
   lod::TileProvider* imagery_tiles_ = nullptr;
