@@ -23,24 +23,54 @@ const char* const kTextureOptionsHelp =
                      [0, 1] after a dynamic-range mapping)
   --texture-opacity A  in [0, 1] (default 1)
   --texture-colormap NAME  grey (default) or viridis
+  --lens LON,LAT,RADIUS_M  a lens over the --texture before it: inside the circle
+                     its samples go through the --lens-op chain instead
+  --lens-op OP, --lens-param K=V  the lens's chain (as --texture-op, --texture-param)
 )";
 
 namespace {
 
+using Ops = std::vector<std::pair<std::string, std::vector<std::string>>>;
+
+struct LensText {
+  std::string where;
+  Ops ops;
+};
+
 struct LayerText {
   std::string store;
-  std::vector<std::pair<std::string, std::vector<std::string>>> ops;
+  Ops ops;
   std::optional<std::string> range, opacity, colormap;
+  std::vector<LensText> lenses;
 };
+
+Result<gpuprocess::OperatorChain> make_chain(const char* option, const Ops& ops) {
+  gpuprocess::OperatorChain chain;
+  for (const auto& [op, params] : ops) {
+    auto step = gpuprocess::make_step(op, params);
+    if (!step) return fail(fmt::format("{} {}: {}", option, op, step.error().message));
+    chain.steps.push_back(std::move(*step));
+  }
+  return chain;
+}
+
+Result<render::Lens> make_lens(const LensText& t) {
+  auto v = RELIEF_TRY(parse_numbers("--lens", t.where, 3));
+  if (!(v[0] >= -180 && v[0] < 360) || !(v[1] >= -90 && v[1] <= 90)) {
+    return fail(fmt::format("--lens: {},{} is not a longitude, latitude", v[0], v[1]));
+  }
+  if (!(v[2] > 0)) return fail(fmt::format("--lens: radius {} m must be > 0", v[2]));
+  render::Lens lens;
+  lens.lon = v[0] > 180 ? v[0] - 360 : v[0], lens.lat = v[1], lens.radius_m = v[2];
+  lens.chain = RELIEF_TRY(make_chain("--lens-op", t.ops));
+  return lens;
+}
 
 Result<render::TextureLayer> make_layer(const LayerText& t, const tiles::Store& store) {
   render::TextureLayer l;
   l.store = &store;
-  for (const auto& [op, params] : t.ops) {
-    auto step = gpuprocess::make_step(op, params);
-    if (!step) return fail(fmt::format("--texture-op {}: {}", op, step.error().message));
-    l.chain.steps.push_back(std::move(*step));
-  }
+  l.chain = RELIEF_TRY(make_chain("--texture-op", t.ops));
+  for (const LensText& lens : t.lenses) l.lenses.push_back(RELIEF_TRY(make_lens(lens)));
   const tiles::SampleStats& st = store.manifest().stats;
   // SAR amplitudes have a long tail: up to mean + 3 std, as the linear mapping.
   const double top = store.manifest().kind == tiles::DatasetKind::Sar
@@ -86,7 +116,7 @@ Result<TextureLayers> take_texture_layers(std::vector<std::string>& argv) {
   std::vector<LayerText> texts;
   for (size_t i = 0; i < argv.size(); ++i) {
     std::string name = argv[i], value;
-    if (!name.starts_with("--texture")) {
+    if (!name.starts_with("--texture") && !name.starts_with("--lens")) {
       rest.push_back(argv[i]);
       continue;
     }
@@ -98,7 +128,7 @@ Result<TextureLayers> take_texture_layers(std::vector<std::string>& argv) {
       return fail(fmt::format("option {} needs a value", name));
     }
     if (name == "--texture") {
-      texts.push_back({value, {}, {}, {}, {}});
+      texts.push_back({value, {}, {}, {}, {}, {}});
       continue;
     }
     if (texts.empty()) return fail(fmt::format("{} {}: comes before any --texture", name, value));
@@ -110,6 +140,17 @@ Result<TextureLayers> take_texture_layers(std::vector<std::string>& argv) {
         return fail(fmt::format("--texture-param {}: comes before any --texture-op", value));
       }
       t.ops.back().second.push_back(value);
+    } else if (name == "--lens") {
+      t.lenses.push_back({value, {}});
+    } else if (name == "--lens-op") {
+      if (t.lenses.empty())
+        return fail(fmt::format("--lens-op {}: comes before any --lens", value));
+      t.lenses.back().ops.push_back({value, {}});
+    } else if (name == "--lens-param") {
+      if (t.lenses.empty() || t.lenses.back().ops.empty()) {
+        return fail(fmt::format("--lens-param {}: comes before any --lens-op", value));
+      }
+      t.lenses.back().ops.back().second.push_back(value);
     } else if (name == "--texture-range") {
       t.range = value;
     } else if (name == "--texture-opacity") {

@@ -3,6 +3,7 @@
 // (one parser): per layer
 //   --texture STORE [--texture-op OP [--texture-param K=V]...]...
 //   [--texture-range MIN,MAX] [--texture-opacity A] [--texture-colormap NAME]
+//   [--lens LON,LAT,RADIUS_M [--lens-op OP [--lens-param K=V]...]...]...
 // They repeat and their order matters (each --texture-op and its
 // --texture-param belong to the --texture before them), so they are taken out
 // of the arguments before the others are parsed.
@@ -26,7 +27,8 @@ struct TextureLayers {
 // unknown operators or parameters, values out of range, a --texture-param or
 // --texture-op before any --texture (or a param before any op), an operator
 // not valid for the store's kind, a chain wider than the store's border, a
-// range with min >= max, an opacity outside [0, 1]: one-line errors.
+// range with min >= max, an opacity outside [0, 1], a lens radius <= 0:
+// one-line errors.
 Result<TextureLayers> take_texture_layers(std::vector<std::string>& argv);
 
 // The help text of the options.

@@ -172,6 +172,12 @@ TEST(TextureRender, BadTextureOptionsAreOneLineErrors) {
   expect_error({"--texture", sar, "--texture-op", "mean", "--texture-param", "radius=9"}, "border");
   expect_error({"--texture", sar, "--texture-colormap", "rainbow"}, "rainbow");
   expect_error({"--texture", (dir / "missing").string()}, "missing");
+  expect_error({"--texture", sar, "--lens", "169.4485,-19.5273,0", "--lens-op", "linear"},
+               "--lens: radius 0 m must be > 0");
+  expect_error({"--texture", sar, "--lens-op", "linear"},
+               "--lens-op linear: comes before any --lens");
+  expect_error({"--texture", sar, "--lens", "169.4485,-19.5273,100", "--lens-op", "nope"},
+               "unknown operator 'nope'");
 }
 
 }  // namespace

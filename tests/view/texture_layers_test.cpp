@@ -25,8 +25,8 @@ const tiles::Store& sar() {
   return testing::built_store("umbra", o);
 }
 
-// Straight down on the middle of the image, from 1.5 km (finest levels).
-const lod::Camera kDown = lod::look_at(169.4485, -19.5273, 0, 1500, 0, -89, 60, 160, 120);
+// Straight down on the middle of the image, from 1.5 km.
+const lod::Camera kDown = lod::look_at(169.4485, -19.5273, 0, 1500, 0, -90, 60, 160, 120);
 
 // `op` then a linear mapping, parameters for the finest level.
 gpuprocess::OperatorChain chain_of(const std::string& op, std::vector<std::string> params,
@@ -156,6 +156,38 @@ TEST_F(TextureLayersTest, LayersCompositeByOpacity) {
   EXPECT_GT(probed, 0);
 }
 
+TEST_F(TextureLayersTest, ALensProcessesItsCircleWithItsOwnChain) {
+  // Global: linear over mean + 3 std; inside a 200 m lens at the view's
+  // centre: over mean + 1 std (brighter). Samples are merged one by one.
+  auto global = layer(chain_of("lee", {"radius=1"}, {"sigmas=3"}));
+  auto lens_chain = chain_of("lee", {"radius=1"}, {"sigmas=1"});
+  auto with_lens = global;
+  with_lens.lenses.push_back({kDown.lon, kDown.lat, 200, lens_chain});
+  const std::vector<uint8_t> outside = still({global}), inside = still({layer(lens_chain)}),
+                             lensed = still({with_lens});
+  ASSERT_EQ(lensed.size(), outside.size());
+  // Straight down: pixel distances from the centre, times the ground size of a pixel.
+  const double metres_per_pixel =
+      2 * kDown.height * std::tan(kDown.fov_y / 2 * M_PI / 180) / kDown.height_px;
+  size_t in = 0, out = 0;
+  for (int y = 0; y < kDown.height_px; ++y) {
+    for (int x = 0; x < kDown.width; ++x) {
+      const double r = std::hypot(x + 0.5 - kDown.width / 2.0, y + 0.5 - kDown.height_px / 2.0) *
+                       metres_per_pixel;
+      const size_t i = (static_cast<size_t>(y) * kDown.width + x) * 4;
+      if (r < 170) {
+        EXPECT_EQ(lensed[i], inside[i]) << x << "," << y;
+        in += inside[i] != outside[i];
+      } else if (r > 230) {
+        EXPECT_EQ(lensed[i], outside[i]) << x << "," << y;
+        ++out;
+      }
+    }
+  }
+  EXPECT_GT(in, 100u) << "the chains differ inside the lens";
+  EXPECT_GT(out, 1000u);
+}
+
 TEST_F(TextureLayersTest, BadLayersAreOneLineErrors) {
   auto bad = layer({}, 1.5f);
   SceneOptions o;
@@ -168,6 +200,12 @@ TEST_F(TextureLayersTest, BadLayersAreOneLineErrors) {
   s = Scene::create(nullptr, nullptr, o, clock_);
   ASSERT_FALSE(s);
   EXPECT_NE(s.error().message.find("border"), std::string::npos) << s.error().message;
+  auto lens = layer({});
+  lens.lenses.push_back({kDown.lon, kDown.lat, 0, {}});
+  o.texture_layers = {lens};
+  s = Scene::create(nullptr, nullptr, o, clock_);
+  ASSERT_FALSE(s);
+  EXPECT_NE(s.error().message.find("lens radius"), std::string::npos) << s.error().message;
   // A changed layer is checked too, and the scene keeps its old parameters.
   auto good = scene({layer({})}, false);
   ASSERT_TRUE(good);

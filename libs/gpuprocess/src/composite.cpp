@@ -1,5 +1,8 @@
 #include "relief/gpuprocess/composite.h"
 
+#include <algorithm>
+#include <cmath>
+
 #include <fmt/format.h>
 
 #include "gl.h"
@@ -76,6 +79,32 @@ void main() {
 }
 )";
 
+// A lens: the samples of `lens_values` inside the circle replace those of
+// `values` (both the tile's interior plus a one-sample border). Positions
+// relative to the lens centre, in degrees, then metres on the local tangent
+// plane (lenses are small against the Earth).
+constexpr const char* kLensPass = R"(#version 450 core
+layout(local_size_x = 8, local_size_y = 8) in;
+layout(binding = 0) uniform sampler2D lens_values;
+layout(r32f, binding = 0) uniform image2D values;
+uniform ivec2 size;
+uniform ivec2 lens_first;  // texel of the lens result's (0, 0)
+uniform vec2 base;         // texel (0, 0) minus the centre, degrees (lon, lat)
+uniform vec2 step_deg;     // from one texel to the next (lon, lat: negative, rows run south)
+uniform vec2 metres;       // per degree of lon, lat at the centre
+uniform float radius;
+void main() {
+  ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+  if (any(greaterThanEqual(p, size))) return;
+  vec2 d = (base + vec2(p) * step_deg) * metres;
+  if (dot(d, d) <= radius * radius) {
+    imageStore(values, p, texelFetch(lens_values, lens_first + p, 0));
+  }
+}
+)";
+
+constexpr double kMetresPerDegree = 6378137.0 * 3.14159265358979323846 / 180;
+
 struct Texture2D {
   GLuint id = 0;
   int width = 0, height = 0;
@@ -103,6 +132,13 @@ GLuint groups(int n) {
 
 }  // namespace
 
+bool lens_touches(const CompositeLens& lens, const geo::GeoBox& box) {
+  const double dlat = lens.radius_m / kMetresPerDegree;
+  const double dlon = dlat / std::max(std::cos(lens.lat * 3.14159265358979323846 / 180), 1e-6);
+  // One sample's margin is the caller's: boxes here include the kept border.
+  return box.intersects({lens.lon - dlon, lens.lat - dlat, lens.lon + dlon, lens.lat + dlat});
+}
+
 Result<ColorMap> parse_colormap(const std::string& name) {
   if (name == "grey" || name == "gray") return ColorMap::grey;
   if (name == "viridis") return ColorMap::viridis;
@@ -114,8 +150,46 @@ const char* to_string(ColorMap map) {
 }
 
 struct Compositor::Impl {
-  GlProgram layer_pass, store_pass;
-  Texture2D accum, colours;
+  GlProgram layer_pass, store_pass, lens_pass;
+  Texture2D accum, colours, values;
+
+  // The layer's values with its lenses merged in, in `values`; returns the
+  // texel of interior sample (0, 0) there.
+  Result<int> merge_lenses(GpuProcessor& gpu, const CompositeLayer& l, const GpuTile& global) {
+    const tiles::Raster& t = *l.tile;
+    values.ensure(GL_R32F, global.width, global.height);
+    glCopyImageSubData(global.texture, GL_TEXTURE_2D, 0, global.offset, global.offset, 0, values.id,
+                       GL_TEXTURE_2D, 0, 0, 0, 0, global.width, global.height, 1);
+    const int iw = t.width() - 2 * l.border, ih = t.height() - 2 * l.border;
+    const double dx = l.bounds.width() / iw, dy = l.bounds.height() / ih;
+    const GLuint lp = lens_pass.id();
+    for (const CompositeLens& lens : l.lenses) {
+      const geo::GeoBox kept{l.bounds.west - dx, l.bounds.south - dy, l.bounds.east + dx,
+                             l.bounds.north + dy};
+      if (!lens_touches(lens, kept)) continue;
+      const GpuTile g = RELIEF_TRY(gpu.run_on_gpu(*lens.chain, t, l.border, l.stats));
+      glUseProgram(lp);
+      auto u = [lp](const char* name) { return glGetUniformLocation(lp, name); };
+      glProgramUniform2i(lp, u("size"), global.width, global.height);
+      glProgramUniform2i(lp, u("lens_first"), g.offset, g.offset);
+      // Texel (0, 0) is interior sample (-1, -1), whose centre is half a sample out.
+      glProgramUniform2f(lp, u("base"), static_cast<float>(l.bounds.west - 0.5 * dx - lens.lon),
+                         static_cast<float>(l.bounds.north + 0.5 * dy - lens.lat));
+      glProgramUniform2f(lp, u("step_deg"), static_cast<float>(dx), static_cast<float>(-dy));
+      const double m = kMetresPerDegree;
+      glProgramUniform2f(lp, u("metres"),
+                         static_cast<float>(m * std::cos(lens.lat * 3.14159265358979323846 / 180)),
+                         static_cast<float>(m));
+      glProgramUniform1f(lp, u("radius"), static_cast<float>(lens.radius_m));
+      glBindTextureUnit(0, g.texture);
+      glBindImageTexture(0, values.id, 0, GL_FALSE, 0, GL_READ_WRITE, GL_R32F);
+      glDispatchCompute(groups(global.width), groups(global.height), 1);
+      glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT |
+                      GL_TEXTURE_UPDATE_BARRIER_BIT);
+    }
+    glBindTextureUnit(0, values.id);
+    return 1;
+  }
 };
 
 Compositor::Compositor(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
@@ -125,6 +199,7 @@ Result<std::unique_ptr<Compositor>> Compositor::create() {
   auto impl = std::make_unique<Impl>();
   impl->layer_pass = RELIEF_TRY(compile_compute("composite layer", kLayerPass));
   impl->store_pass = RELIEF_TRY(compile_compute("composite store", kStorePass));
+  impl->lens_pass = RELIEF_TRY(compile_compute("composite lens", kLensPass));
   return std::unique_ptr<Compositor>(new Compositor(std::move(impl)));
 }
 
@@ -153,6 +228,7 @@ Status Compositor::composite(GpuProcessor& gpu, std::span<const CompositeLayer> 
           RELIEF_TRY(gpu.run_on_gpu(l.chain ? *l.chain : kNone, t, l.border, l.stats));
       first = g.offset + 1;
       glBindTextureUnit(0, g.texture);
+      if (!l.lenses.empty()) first = RELIEF_TRY(im.merge_lenses(gpu, l, g));
     }
     glUseProgram(lp);
     glProgramUniform1i(lp, uniform("rgba"), rgba ? 1 : 0);

@@ -520,13 +520,23 @@ class GlTerrainRenderer final : public TerrainRenderer {
     const int slot =
         RELIEF_TRY(slots_.insert({a, true, version_}, width, height, nullptr, uploads));
     std::vector<gpuprocess::OperatorChain> chains(layers_.size());
+    std::vector<std::vector<gpuprocess::OperatorChain>> lens_chains(layers_.size());
+    std::vector<std::vector<gpuprocess::CompositeLens>> lenses(layers_.size());
     std::vector<process::GlobalStats> global(layers_.size());
     std::vector<gpuprocess::CompositeLayer> inputs;
     for (size_t i = 0; i < layers_.size(); ++i) {
       if (!tiles[i]) continue;
       const TextureLayer& l = layers_[i];
       const tiles::Manifest& man = l.store->manifest();
-      chains[i] = gpuprocess::scale_chain(l.chain, std::ldexp(1.0, man.max_level - keys[i].level));
+      const double factor = std::ldexp(1.0, man.max_level - keys[i].level);
+      chains[i] = gpuprocess::scale_chain(l.chain, factor);
+      for (const Lens& lens : l.lenses) {
+        lens_chains[i].push_back(gpuprocess::scale_chain(lens.chain, factor));
+      }
+      for (size_t j = 0; j < l.lenses.size(); ++j) {
+        lenses[i].push_back(
+            {&lens_chains[i][j], l.lenses[j].lon, l.lenses[j].lat, l.lenses[j].radius_m});
+      }
       global[i] = {man.stats.min, man.stats.max, man.stats.mean, man.stats.stddev};
       const int up = a.level - keys[i].level;
       const double tw = std::ldexp(l.store->grid().width(), -up),
@@ -540,6 +550,8 @@ class GlTerrainRenderer final : public TerrainRenderer {
       c.colormap = l.colormap;
       c.opacity = l.opacity;
       c.window = {(a.x - (keys[i].x << up)) * tw, (a.y - (keys[i].y << up)) * th, tw, th};
+      c.lenses = lenses[i];
+      c.bounds = keys[i].bounds();
       inputs.push_back(c);
       ++stats.layer_tiles_processed;
     }
@@ -624,6 +636,19 @@ Status check_texture_layer(const TextureLayer& l) {
   }
   if (!(l.opacity >= 0 && l.opacity <= 1)) {
     return fail(fmt::format("{}: opacity {} is not in [0, 1]", name, l.opacity));
+  }
+  for (const Lens& lens : l.lenses) {
+    if (!(lens.radius_m > 0) || !std::isfinite(lens.radius_m)) {
+      return fail(fmt::format("{}: a lens radius must be > 0 m, not {}", name, lens.radius_m));
+    }
+    if (!(std::abs(lens.lat) <= 90) || !(std::abs(lens.lon) <= 360)) {
+      return fail(fmt::format("{}: lens centre {},{} is not a longitude, latitude", name, lens.lon,
+                              lens.lat));
+    }
+    if (l.store->manifest().sample_type != tiles::SampleType::Float32) {
+      return fail(fmt::format("{}: lenses are for single-band stores, not RGBA imagery", name));
+    }
+    RELIEF_CHECK(gpuprocess::check_chain_for(lens.chain, l.store->manifest(), name + " (lens)"));
   }
   return {};
 }

@@ -14,6 +14,7 @@
 #include <string>
 
 #include "relief/base/result.h"
+#include "relief/geo/tile_key.h"
 #include "relief/gpuprocess/gpu_processor.h"
 
 namespace relief::gpuprocess {
@@ -23,6 +24,17 @@ enum class ColorMap { grey, viridis };
 // "grey" or "viridis"; anything else is a one-line error.
 Result<ColorMap> parse_colormap(const std::string& name);
 const char* to_string(ColorMap map);
+
+// A lens (seed 003 §1.5.2): inside a circle on the ground, a layer's samples
+// come from another chain. Samples are merged one by one, so a tile the
+// circle's edge crosses is processed by both chains.
+struct CompositeLens {
+  const OperatorChain* chain = nullptr;  // for the tile's level (scale_chain)
+  double lon = 0, lat = 0, radius_m = 0;
+};
+
+// Whether a lens's circle may cover samples of `box` (a conservative test).
+bool lens_touches(const CompositeLens& lens, const geo::GeoBox& box);
 
 struct CompositeLayer {
   // Float32 single band (processed by `chain`) or UInt8 RGBA, premultiplied
@@ -37,6 +49,9 @@ struct CompositeLayer {
   // The part of the tile's interior the composite covers, in interior
   // samples: x0, y0, width, height (the whole tile: 0, 0, its interior size).
   std::array<double, 4> window{};
+  // Single band: lenses, and where the tile's interior lies on the ground.
+  std::span<const CompositeLens> lenses;
+  geo::GeoBox bounds;
 };
 
 class Compositor {

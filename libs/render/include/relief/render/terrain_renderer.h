@@ -60,6 +60,15 @@ struct FrameStats {
 // "Draw-time processing"): a store's tiles through an operator chain, mapped
 // through [range_min, range_max] and a colour map (single-band stores; RGBA
 // imagery is drawn as it is), composited by opacity in the order given.
+// A lens over a texture layer (seed 003 §1.5.2): inside the circle (centre in
+// degrees, radius in metres on the ground) the layer's samples go through
+// `chain` (parameters for the store's finest level) instead of the layer's;
+// quads the edge crosses are processed by both and merged sample by sample.
+struct Lens {
+  double lon = 0, lat = 0, radius_m = 0;
+  gpuprocess::OperatorChain chain;
+};
+
 struct TextureLayer {
   const tiles::Store* store = nullptr;
   // Where tiles come from: a non-blocking provider for interactive frames
@@ -72,10 +81,12 @@ struct TextureLayer {
   float range_min = 0, range_max = 1;
   gpuprocess::ColorMap colormap = gpuprocess::ColorMap::grey;
   float opacity = 1;
+  std::vector<Lens> lenses;  // single-band layers
 };
 
 // Whether a layer can be drawn: chain valid for the store (kind, border,
-// statistics), range_min < range_max, opacity in [0, 1]. One-line errors.
+// statistics), range_min < range_max, opacity in [0, 1], lenses of a positive
+// radius with valid chains on a single-band store. One-line errors.
 Status check_texture_layer(const TextureLayer& layer);
 
 class TerrainRenderer {
