@@ -456,8 +456,10 @@ class GlTerrainRenderer final : public TerrainRenderer {
     int m = key.level - finest;
     bool wanted = false;  // the quad draws its own composite, or needs none
     for (TileKey a{finest, key.x >> m, key.y >> m};; a = *a.parent(), ++m) {
-      const Made made =
-          RELIEF_TRY(make_composite(a, quad.priority, a.level == finest, uploads, stats));
+      // Missing ancestors' tiles are requested too (at a lower priority): the
+      // quad shows something while its own load; coarse tiles are few and shared.
+      const double priority = a.level == finest ? quad.priority : quad.priority * 0.5;
+      const Made made = RELIEF_TRY(make_composite(a, priority, uploads, stats));
       if (made.empty || made.layer) wanted = a.level == finest;
       if (made.empty) break;  // no layer has data here: the terrain's own colours
       if ((layer = made.layer)) {
@@ -481,8 +483,8 @@ class GlTerrainRenderer final : public TerrainRenderer {
 
   // The composite of texture key `a` for the current parameters: cached, or
   // made from the layers' tiles when every one is at hand (otherwise those
-  // missing are requested when `request`, and nothing is made).
-  Result<Made> make_composite(const TileKey& a, double priority, bool request, gl::Uploads& uploads,
+  // missing are requested, and nothing is made).
+  Result<Made> make_composite(const TileKey& a, double priority, gl::Uploads& uploads,
                               FrameStats& stats) {
     Made made;
     if (auto l = slots_.find({a, true, version_})) {
@@ -505,7 +507,7 @@ class GlTerrainRenderer final : public TerrainRenderer {
       tiles[i] = RELIEF_TRY(layers_[i].tiles->get(keys[i]));
       if (!tiles[i]) {
         missing = true;
-        if (request) layers_[i].tiles->request(keys[i], priority);
+        layers_[i].tiles->request(keys[i], priority);
       }
     }
     made.empty = !any;
