@@ -11,6 +11,7 @@
 #include "render_parallel.h"
 #include "render_path.h"
 #include "render_setup.h"
+#include "texture_options.h"
 
 namespace relief::cli {
 
@@ -19,6 +20,9 @@ constexpr const char* kHelp =
     R"(usage: relief render STORE [--imagery STORE2] (--camera C | --look-at L) -o FRAME.png [options]
        relief render STORE [--imagery STORE2] --path PATH.json -o DIR [options]
        relief render STORE [--imagery STORE2] --path PATH.json -o MOVIE.mp4 [options]
+       relief render [STORE] --texture STORE2 [--texture-op OP [--texture-param K=V]...]...
+                     [--texture-range MIN,MAX] [--texture-opacity A] [--texture-colormap NAME]
+                     ... (--camera C | --look-at L | --path PATH.json) -o OUT [options]
 
 Renders an elevation store headless (EGL; Mesa's llvmpipe where there is no
 GPU). The mesh keeps every finest sample within --pixel-error pixels of
@@ -83,7 +87,7 @@ path options:
 movie options (-o MOVIE.mp4):
   --codec C          h264 (default; libx264, yuv420p: even --size only)
   --crf N            quality, 0 (lossless) to 51 (default 18; lower is better)
-parallel (under mpirun -n N; docs/parallel.md):
+%TEXTURE%parallel (under mpirun -n N; docs/parallel.md):
   --parallel MODE    sort-first:h|v|grid (screen tiles), sort-last:block|quadtree|active
                      (quads, depth-composited) or wall:WALL.json (one display per rank,
                      written as OUT_rR_cC.png); stills and --path, complete frames
@@ -91,8 +95,9 @@ parallel (under mpirun -n N; docs/parallel.md):
 )";
 
 // What a render reads and writes, for the check that no output replaces an input.
-Status check_render_outputs(const Args& args) {
+Status check_render_outputs(const Args& args, const std::vector<std::string>& texture_paths) {
   std::vector<std::string> inputs = args.positional();
+  inputs.insert(inputs.end(), texture_paths.begin(), texture_paths.end());
   for (const char* name : {"--imagery", "--path"}) {
     if (auto p = args.get(name)) inputs.push_back(*p);
   }
@@ -128,7 +133,11 @@ nlohmann::json stats_json(const lod::Selection& s, const render::FrameStats& f) 
           {"selection_ms", s.stats.seconds * 1e3},
           {"prepare_ms", f.prepare_seconds * 1e3},
           {"gpu_ms", f.gpu_seconds * 1e3},
-          {"max_error_pixels", s.stats.max_error_pixels}};
+          {"max_error_pixels", s.stats.max_error_pixels},
+          {"texture_layers",
+           {{"tiles_processed", f.layer_tiles_processed},
+            {"processing_ms", f.processing_seconds * 1e3},
+            {"misses", f.texture_misses}}}};
 }
 
 int render_still(const Args& args, RenderSetup& setup) {
@@ -139,13 +148,14 @@ int render_still(const Args& args, RenderSetup& setup) {
   if (!camera) return report_error(camera.error().message);
   auto view = lod::make_view(*camera);
   if (!view) return report_error(view.error().message);
-  tiles::Store& store = setup.store;
-  // Below the ground: the terrain under the eye, at the finest level.
-  auto ground = store.sample(camera->lon, camera->lat, store.manifest().max_level);
-  if (!ground) return report_error(ground.error().message);
-  if (*ground && camera->height < **ground) {
-    return report_error(fmt::format("--camera: {:.1f} m is below the ground ({:.1f} m) at {},{}",
-                                    camera->height, **ground, camera->lon, camera->lat));
+  if (const tiles::Store* store = elevation_of(setup)) {
+    // Below the ground: the terrain under the eye, at the finest level.
+    auto ground = store->sample(camera->lon, camera->lat, store->manifest().max_level);
+    if (!ground) return report_error(ground.error().message);
+    if (*ground && camera->height < **ground) {
+      return report_error(fmt::format("--camera: {:.1f} m is below the ground ({:.1f} m) at {},{}",
+                                      camera->height, **ground, camera->lon, camera->lat));
+    }
   }
 
   // Complete frame: every tile read first. The brute-force reference
@@ -157,8 +167,8 @@ int render_still(const Args& args, RenderSetup& setup) {
   if (!context) return report_error(context.error().message);
   auto target = render::make_offscreen_target(setup.width, setup.height);
   if (!target) return report_error(target.error().message);
-  auto scene =
-      view::Scene::create(store, setup.imagery ? &*setup.imagery : nullptr, so, steady_clock());
+  auto scene = view::Scene::create(elevation_of(setup), setup.imagery ? &*setup.imagery : nullptr,
+                                   so, steady_clock());
   if (!scene) return report_error(scene.error().message);
   auto frame = (*scene)->draw(*camera, **target);
   if (!frame) return report_error(frame.error().message);
@@ -197,8 +207,16 @@ int render_still(const Args& args, RenderSetup& setup) {
 
 }  // namespace
 
-int run_render(const std::vector<std::string>& argv) {
-  if (wants_help(argv)) return print_help(kHelp);
+int run_render(const std::vector<std::string>& command_line) {
+  if (wants_help(command_line)) {
+    std::string help = kHelp;
+    help.replace(help.find("%TEXTURE%"), 9, kTextureOptionsHelp);
+    return print_help(help.c_str());
+  }
+  // Texture options repeat and their order matters: taken out first.
+  std::vector<std::string> argv = command_line;
+  auto textures = take_texture_layers(argv);
+  if (!textures) return report_error(textures.error().message);
   auto args = Args::parse(argv,
                           {{"--output", "-o"},
                            {"--imagery"},
@@ -248,9 +266,14 @@ int run_render(const std::vector<std::string>& argv) {
       if (args->get(name)) return report_error(std::string(name) + ": only for a movie (--path)");
     }
   }
-  if (auto safe = check_render_outputs(*args); !safe) return report_error(safe.error().message);
-  if (args->get("--parallel")) return render_parallel(*args);
-  auto setup = parse_render_setup(*args);
+  if (auto safe = check_render_outputs(*args, textures->paths); !safe) {
+    return report_error(safe.error().message);
+  }
+  if (args->get("--parallel")) {
+    if (!textures->layers.empty()) return report_error("--parallel: not with --texture layers yet");
+    return render_parallel(*args);
+  }
+  auto setup = parse_render_setup(*args, std::move(*textures));
   if (!setup) return report_error(setup.error().message);
   if (args->get("--path")) return render_path(*args, *setup);
   return render_still(*args, *setup);

@@ -14,6 +14,7 @@
 #include "relief/window/viewer.h"
 #include "relief/window/window.h"
 #include "render_setup.h"
+#include "texture_options.h"
 
 namespace relief::cli {
 
@@ -56,7 +57,7 @@ options:
   --no-vsync         do not wait for the display's refresh
   --fov, --exaggeration, --lod, --sky, --gpu-budget, --cache, --cache-size
                      as relief render
-)";
+%TEXTURE%)";
 
 // An output written at exit must be writable now, not after a long session.
 Status check_writable(const char* option, const std::string& path) {
@@ -72,8 +73,9 @@ Status check_writable(const char* option, const std::string& path) {
   return {};
 }
 
-Status check_view_outputs(const Args& args) {
+Status check_view_outputs(const Args& args, const std::vector<std::string>& texture_paths) {
   std::vector<std::string> inputs = args.positional();
+  inputs.insert(inputs.end(), texture_paths.begin(), texture_paths.end());
   for (const char* name : {"--imagery", "--play"}) {
     if (auto p = args.get(name)) inputs.push_back(*p);
   }
@@ -213,8 +215,16 @@ int view_session(const Args& args, RenderSetup& setup) {
 
 }  // namespace
 
-int run_view(const std::vector<std::string>& argv) {
-  if (wants_help(argv)) return print_help(kHelp);
+int run_view(const std::vector<std::string>& command_line) {
+  if (wants_help(command_line)) {
+    std::string help = kHelp;
+    help.replace(help.find("%TEXTURE%"), 9, kTextureOptionsHelp);
+    return print_help(help.c_str());
+  }
+  // The texture layers of `relief render`, parsed the same way.
+  std::vector<std::string> argv = command_line;
+  auto textures = take_texture_layers(argv);
+  if (!textures) return report_error(textures.error().message);
   auto args = Args::parse(argv,
                           {{"--imagery"},
                            {"--elevation"},
@@ -251,8 +261,10 @@ int run_view(const std::vector<std::string>& argv) {
       (args->get("--camera") || args->get("--look-at") || args->get("--mode"))) {
     return report_error("view: --play replaces --camera, --look-at and --mode");
   }
-  if (auto safe = check_view_outputs(*args); !safe) return report_error(safe.error().message);
-  auto setup = parse_render_setup(*args);
+  if (auto safe = check_view_outputs(*args, textures->paths); !safe) {
+    return report_error(safe.error().message);
+  }
+  auto setup = parse_render_setup(*args, std::move(*textures));
   if (!setup) return report_error(setup.error().message);
   return view_session(*args, *setup);
 }

@@ -199,8 +199,8 @@ int render_path(const Args& args, RenderSetup& setup, const Clock& clock) {
   if (!context) return report_error(context.error().message);
   auto target = render::make_offscreen_target(setup.width, setup.height);
   if (!target) return report_error(target.error().message);
-  auto scene =
-      view::Scene::create(setup.store, setup.imagery ? &*setup.imagery : nullptr, so, clock);
+  auto scene = view::Scene::create(elevation_of(setup), setup.imagery ? &*setup.imagery : nullptr,
+                                   so, clock);
   if (!scene) return report_error(scene.error().message);
   stream::TileLoader* loader = (*scene)->elevation_loader();
   stream::TileLoader* imagery_loader = (*scene)->imagery_loader();
@@ -268,6 +268,11 @@ int render_path(const Args& args, RenderSetup& setup, const Clock& clock) {
                          {"repaired", d.repaired}};
     }
     if (imagery_loader) f["imagery_memory"] = loader_json(imagery_loader->stats());
+    if (!setup.textures.layers.empty()) {
+      f["texture_layers"] = {{"tiles_processed", frame.layer_tiles_processed},
+                             {"processing_ms", frame.processing_seconds * 1e3},
+                             {"misses", frame.texture_misses}};
+    }
     frames.push_back(std::move(f));
     progress->advance();
     if (!options->frames) return {};

@@ -58,9 +58,14 @@ Result<tiles::Store> fuse_elevation_options(const Args& args, const std::string&
   return pipeline::fuse_elevation_layers(std::move(layers), mode, executor);
 }
 
-Result<RenderSetup> parse_render_setup(const Args& args) {
-  if (args.positional().size() != 1) return fail("render: expected exactly one STORE");
+Result<RenderSetup> parse_render_setup(const Args& args, TextureLayers textures) {
+  const bool textured = !textures.layers.empty();
+  if (args.positional().size() > 1 || (args.positional().empty() && !textured)) {
+    return fail(textured ? "render: expected at most one elevation STORE"
+                         : "render: expected exactly one STORE");
+  }
   RenderSetup s;
+  s.textures = std::move(textures);
   if (auto size = args.get("--size")) {
     char x = 0, end = 0;
     if (std::sscanf(size->c_str(), "%d%c%d%c", &s.width, &x, &s.height, &end) != 3 || x != 'x' ||
@@ -107,13 +112,26 @@ Result<RenderSetup> parse_render_setup(const Args& args) {
     if (!(*mbit > 0)) return fail("--simulate-bandwidth: must be > 0 Mbit/s");
     access.link.bits_per_second = *mbit * 1e6;
   }
-  s.store = RELIEF_TRY(open_kind(args.positional()[0], tiles::DatasetKind::Elevation, "STORE",
-                                 access, &s.disk_cache));
-  s.store =
-      RELIEF_TRY(fuse_elevation_options(args, args.positional()[0], std::move(s.store), access));
+  s.has_elevation = !args.positional().empty();
+  if (s.has_elevation) {
+    s.store = RELIEF_TRY(open_kind(args.positional()[0], tiles::DatasetKind::Elevation, "STORE",
+                                   access, &s.disk_cache));
+    s.store =
+        RELIEF_TRY(fuse_elevation_options(args, args.positional()[0], std::move(s.store), access));
+  } else if (!args.get_all("--elevation").empty()) {
+    return fail("--elevation: fuses with an elevation STORE, and none was given");
+  }
   s.disk_cache_budget = access.cache_bytes;
   if (auto path = args.get("--imagery")) {
     s.imagery = RELIEF_TRY(open_kind(*path, tiles::DatasetKind::Imagery, "--imagery"));
+    if (textured) {  // the bottom layer, as it is
+      s.textures.stores.push_front(std::move(*s.imagery));
+      s.textures.paths.insert(s.textures.paths.begin(), *path);
+      render::TextureLayer bottom;
+      bottom.store = &s.textures.stores.front();
+      s.textures.layers.insert(s.textures.layers.begin(), bottom);
+      s.imagery.reset();
+    }
   }
   return s;
 }
@@ -123,6 +141,13 @@ view::SceneOptions scene_options(const RenderSetup& setup) {
   so.selection.pixel_error = setup.pixel_error;
   so.selection.full_resolution = setup.full_resolution;
   if (setup.imagery) so.selection.texture = &*setup.imagery;
+  so.texture_layers = setup.textures.layers;
+  for (const render::TextureLayer& l : so.texture_layers) {  // split down to the finest texture
+    if (!so.selection.texture ||
+        l.store->manifest().max_level > so.selection.texture->manifest().max_level) {
+      so.selection.texture = l.store;
+    }
+  }
   so.full_resolution = setup.full_resolution;
   so.mesh_level = setup.mesh_level;
   so.selection.mode = setup.lod_mode;

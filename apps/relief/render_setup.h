@@ -10,11 +10,14 @@
 #include "open_store.h"
 #include "relief/tiles/store.h"
 #include "relief/view/scene.h"
+#include "texture_options.h"
 
 namespace relief::cli {
 
 struct RenderSetup {
-  tiles::Store store;
+  tiles::Store store;  // the elevation store, when has_elevation
+  bool has_elevation = true;
+  TextureLayers textures;  // --texture layers (docs/gpu-processing.md)
   std::optional<tiles::Store> imagery;
   int width = 1024, height = 768;
   double fov = 60, pixel_error = 1, exaggeration = 1;
@@ -28,7 +31,14 @@ struct RenderSetup {
   uint64_t disk_cache_budget = 0;
 };
 
-Result<RenderSetup> parse_render_setup(const Args& args);
+// `textures`: the --texture layers (take_texture_layers()); with any, the
+// elevation store is optional (they drape on the ellipsoid).
+Result<RenderSetup> parse_render_setup(const Args& args, TextureLayers textures = {});
+
+// The elevation store, or null (texture layers on the bare ellipsoid).
+inline const tiles::Store* elevation_of(const RenderSetup& s) {
+  return s.has_elevation ? &s.store : nullptr;
+}
 
 // `--elevation STORE` (repeatable) and `--fuse first|mean`: `first` alone, or
 // the elevation layers first, then each --elevation, fused at draw time

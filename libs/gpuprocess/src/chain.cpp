@@ -64,6 +64,28 @@ Status check_stats(const OperatorChain& chain, const process::GlobalStats* stats
   return {};
 }
 
+Status check_chain_for(const OperatorChain& chain, const tiles::Manifest& m,
+                       const std::string& name) {
+  for (const auto& s : chain.steps) {
+    if (m.sample_type != tiles::SampleType::Float32) {
+      return fail(fmt::format("{}: operator {} needs a single-band store, not RGBA {}", name,
+                              s.op->name, tiles::to_string(m.kind)));
+    }
+    if (s.op->sar_only && m.kind != tiles::DatasetKind::Sar) {
+      return fail(fmt::format("{}: operator {} expects {}, but the store holds {} data", name,
+                              s.op->name, s.op->input, tiles::to_string(m.kind)));
+    }
+  }
+  if (auto st = check_fits(chain, m.border); !st) {
+    return fail(fmt::format("{}: {}", name, st.error().message));
+  }
+  const process::GlobalStats stats{m.stats.min, m.stats.max, m.stats.mean, m.stats.stddev};
+  if (auto st = check_stats(chain, &stats); !st) {
+    return fail(fmt::format("{}: {}", name, st.error().message));
+  }
+  return {};
+}
+
 Result<tiles::Raster> run_chain_cpu(const OperatorChain& chain, const tiles::Raster& tile,
                                     int border, const process::GlobalStats* stats,
                                     Executor& executor) {

@@ -71,6 +71,19 @@ Result<std::unique_ptr<GpuProcessor>> GpuProcessor::create() {
 
 Result<tiles::Raster> GpuProcessor::run(const OperatorChain& chain, const tiles::Raster& tile,
                                         int border, const process::GlobalStats* stats) {
+  const GpuTile t = RELIEF_TRY(run_on_gpu(chain, tile, border, stats));
+  tiles::Raster result(tiles::SampleType::Float32, 1, t.width, t.height);
+  const auto bytes = static_cast<GLsizei>(result.byte_size());
+  glGetTextureSubImage(t.texture, 0, t.offset, t.offset, 0, t.width, t.height, 1, GL_RED, GL_FLOAT,
+                       bytes, result.f32().data());
+  if (const GLenum e = glGetError(); e != GL_NO_ERROR) {
+    return fail(fmt::format("GPU processing: GL error 0x{:x}", e));
+  }
+  return result;
+}
+
+Result<GpuTile> GpuProcessor::run_on_gpu(const OperatorChain& chain, const tiles::Raster& tile,
+                                         int border, const process::GlobalStats* stats) {
   assert(tile.type() == tiles::SampleType::Float32 && tile.bands() == 1);
   RELIEF_CHECK(check_fits(chain, border));
   RELIEF_CHECK(check_stats(chain, stats));
@@ -103,14 +116,10 @@ Result<tiles::Raster> GpuProcessor::run(const OperatorChain& chain, const tiles:
     consumed += m;
     std::swap(in, out);
   }
-  tiles::Raster result(tiles::SampleType::Float32, 1, w - 2 * (border - 1), h - 2 * (border - 1));
-  const auto bytes = static_cast<GLsizei>(result.byte_size());
-  glGetTextureSubImage(in->id(), 0, border - 1, border - 1, 0, result.width(), result.height(), 1,
-                       GL_RED, GL_FLOAT, bytes, result.f32().data());
   if (const GLenum e = glGetError(); e != GL_NO_ERROR) {
     return fail(fmt::format("GPU processing: GL error 0x{:x}", e));
   }
-  return result;
+  return GpuTile{in->id(), border - 1, w - 2 * (border - 1), h - 2 * (border - 1)};
 }
 
 }  // namespace relief::gpuprocess

@@ -64,7 +64,10 @@ class Selector {
     std::sort(s.quads.begin(), s.quads.end(),
               [](const auto& a, const auto& b) { return a.key < b.key; });
     if (o_.neighbour_indices) link_neighbours(s.quads);
-    s.stats.quads_per_level.assign(static_cast<size_t>(terrain_.max_level() + 1), 0);
+    // Quads may go deeper than the terrain (SelectionOptions::max_level).
+    int deepest_quad = terrain_.max_level();
+    for (const auto& q : s.quads) deepest_quad = std::max(deepest_quad, q.key.level);
+    s.stats.quads_per_level.assign(static_cast<size_t>(deepest_quad + 1), 0);
     for (const auto& q : s.quads) {
       ++s.stats.quads_per_level[static_cast<size_t>(q.key.level)];
       s.stats.triangles += terrain_.mesh().triangle_count(q.finer_sides);

@@ -114,6 +114,42 @@ class GlTerrainRenderer final : public TerrainRenderer {
     imagery_tiles_ = imagery_tiles;
   }
 
+  // Texture layers (the other create()): composited per quad on the GPU.
+  Status init_layers(std::vector<TextureLayer> layers) {
+    if (layers.empty()) return {};
+    gpu_ = RELIEF_TRY(gpuprocess::GpuProcessor::create());
+    compositor_ = RELIEF_TRY(gpuprocess::Compositor::create());
+    for (size_t i = 0; i < layers.size(); ++i) {
+      if (layers[i].store->manifest().max_level > layers[reference_].store->manifest().max_level) {
+        reference_ = i;
+      }
+    }
+    owned_layer_tiles_.resize(layers.size());
+    return set_texture_layers(std::move(layers));
+  }
+
+  Status set_texture_layers(std::vector<TextureLayer> layers) override {
+    if (layers.size() != layers_.size() && !layers_.empty()) {
+      return fail(
+          fmt::format("{} texture layers given, the scene has {}", layers.size(), layers_.size()));
+    }
+    for (size_t i = 0; i < layers.size(); ++i) {
+      RELIEF_CHECK(check_texture_layer(layers[i]));
+      if (!layers_.empty() && layers[i].store != layers_[i].store) {
+        return fail(fmt::format("texture layer {}: its store cannot change", i + 1));
+      }
+      if (!layers[i].tiles) {  // a still: read when needed
+        if (!owned_layer_tiles_[i]) {
+          owned_layer_tiles_[i] = lod::blocking_provider(*layers[i].store, uint64_t{256} << 20);
+        }
+        layers[i].tiles = owned_layer_tiles_[i].get();
+      }
+    }
+    layers_ = std::move(layers);
+    ++version_;  // composites of the old parameters are never drawn again
+    return {};
+  }
+
   Status init() {
     program_ = RELIEF_TRY(gl::Program::link(kTerrainVertexShader, kTerrainFragmentShader));
     const lod::MeshTopology& mesh = elevation_.mesh();
@@ -217,6 +253,7 @@ class GlTerrainRenderer final : public TerrainRenderer {
     FrameStats stats;
     gl::Uploads uploads;
     slots_.begin_frame();
+    made_this_frame_ = 0;
     const uint64_t uploads_before = slots_.uploads(), evicted_before = slots_.evicted();
     const lod::MeshTopology& mesh = elevation_.mesh();
     records_.clear();
@@ -232,7 +269,8 @@ class GlTerrainRenderer final : public TerrainRenderer {
       if (auto layer = RELIEF_TRY(height_layer(parent.tile, uploads))) {
         r.slots[1] = static_cast<uint32_t>(*layer), r.slots[3] |= kHasParent;
       }
-      const auto [imagery_window, imagery_layer] = RELIEF_TRY(imagery_for(quad, uploads));
+      const auto [imagery_window, imagery_layer] = RELIEF_TRY(
+          layers_.empty() ? imagery_for(quad, uploads) : composite_for(quad, uploads, stats));
       if (imagery_layer)
         r.slots[2] = static_cast<uint32_t>(*imagery_layer), r.slots[3] |= kHasImagery;
       auto window = [](float out[4], const lod::DataWindow& w) {
@@ -341,7 +379,10 @@ class GlTerrainRenderer final : public TerrainRenderer {
     glUniform1i(program.location("imagery"), 1);
     glUniform1i(program.location("records"), 2);
     glUniform1i(program.location("border"), elevation_.border());
-    glUniform1i(program.location("imagery_border"), imagery_ ? imagery_->manifest().border : 0);
+    // Composites keep a one-sample border (Compositor::composite).
+    glUniform1i(program.location("imagery_border"), !layers_.empty() ? 1
+                                                    : imagery_       ? imagery_->manifest().border
+                                                                     : 0);
     glUniform1f(program.location("exaggeration"), o.exaggeration);
   }
 
@@ -401,11 +442,141 @@ class GlTerrainRenderer final : public TerrainRenderer {
     return std::pair{w, layer};
   }
 
-  static constexpr int kMaxGridK = 11;  // 4097 x 2049 vertices per grid
+  // The composite of a quad's texture layers: that of its tile at the
+  // reference layer's finest level or above, else (its layers' tiles not at
+  // hand yet: requested) of its nearest ancestor whose tiles are, made now if
+  // not cached for the current parameters. Never one of older parameters.
+  Result<std::pair<lod::DataWindow, std::optional<int>>> composite_for(
+      const lod::SelectedQuad& quad, gl::Uploads& uploads, FrameStats& stats) {
+    lod::DataWindow w;
+    std::optional<int> layer;
+    const TileKey& key = quad.key;
+    const tiles::Store& ref = *layers_[reference_].store;
+    const int finest = std::min(key.level, ref.manifest().max_level);
+    int m = key.level - finest;
+    bool wanted = false;  // the quad draws its own composite, or needs none
+    for (TileKey a{finest, key.x >> m, key.y >> m};; a = *a.parent(), ++m) {
+      // Missing ancestors' tiles are requested too (at a lower priority): the
+      // quad shows something while its own load; coarse tiles are few and shared.
+      const double priority = a.level == finest ? quad.priority : quad.priority * 0.5;
+      const Made made = RELIEF_TRY(make_composite(a, priority, uploads, stats));
+      if (made.empty || made.layer) wanted = a.level == finest;
+      if (made.empty) break;  // no layer has data here: the terrain's own colours
+      if ((layer = made.layer)) {
+        w.tile = a;
+        w.width = std::ldexp(ref.grid().width(), -m);
+        w.height = std::ldexp(ref.grid().height(), -m);
+        w.x0 = (key.x - (a.x << m)) * w.width;
+        w.y0 = (key.y - (a.y << m)) * w.height;
+        break;
+      }
+      if (a.level == 0) break;
+    }
+    if (!wanted) ++stats.texture_misses;  // an ancestor's, or nothing, while tiles load
+    return std::pair{w, layer};
+  }
+
+  struct Made {
+    std::optional<int> layer;  // the composite's layer in the imagery array
+    bool empty = false;        // no texture layer has data at the key
+  };
+
+  // The composite of texture key `a` for the current parameters: cached, or
+  // made from the layers' tiles when every one is at hand (otherwise those
+  // missing are requested, and nothing is made).
+  Result<Made> make_composite(const TileKey& a, double priority, gl::Uploads& uploads,
+                              FrameStats& stats) {
+    Made made;
+    if (auto l = slots_.find({a, true, version_})) {
+      made.layer = l;
+      return made;
+    }
+    std::vector<lod::TilePtr> tiles(layers_.size());
+    std::vector<TileKey> keys(layers_.size());
+    bool any = false, missing = false, interactive = false;
+    for (size_t i = 0; i < layers_.size(); ++i) {
+      interactive = interactive || !layers_[i].tiles->blocking();
+      const tiles::Store& store = *layers_[i].store;
+      const tiles::Manifest& man = store.manifest();
+      const int level = std::min(a.level, man.max_level);
+      if (level < man.min_level) continue;
+      const int up = a.level - level;
+      keys[i] = TileKey{level, a.x >> up, a.y >> up};
+      if (!store.has_tile(keys[i])) continue;
+      any = true;
+      tiles[i] = RELIEF_TRY(layers_[i].tiles->get(keys[i]));
+      if (!tiles[i]) {
+        missing = true;
+        layers_[i].tiles->request(keys[i], priority);
+      }
+    }
+    made.empty = !any;
+    if (!any || missing) return made;
+    // Interactive frames do not wait for processing either: past a few
+    // composites, the rest are made by the next frames (ancestors meanwhile).
+    if (interactive && made_this_frame_ >= kCompositesPerFrame) return made;
+    ++made_this_frame_;
+    const auto start = Clock::now();
+    const tiles::Store& ref = *layers_[reference_].store;
+    const int width = ref.grid().width() + 2, height = ref.grid().height() + 2;
+    const int slot =
+        RELIEF_TRY(slots_.insert({a, true, version_}, width, height, nullptr, uploads));
+    std::vector<gpuprocess::OperatorChain> chains(layers_.size());
+    std::vector<std::vector<gpuprocess::OperatorChain>> lens_chains(layers_.size());
+    std::vector<std::vector<gpuprocess::CompositeLens>> lenses(layers_.size());
+    std::vector<process::GlobalStats> global(layers_.size());
+    std::vector<gpuprocess::CompositeLayer> inputs;
+    for (size_t i = 0; i < layers_.size(); ++i) {
+      if (!tiles[i]) continue;
+      const TextureLayer& l = layers_[i];
+      const tiles::Manifest& man = l.store->manifest();
+      const double factor = std::ldexp(1.0, man.max_level - keys[i].level);
+      chains[i] = gpuprocess::scale_chain(l.chain, factor);
+      for (const Lens& lens : l.lenses) {
+        lens_chains[i].push_back(gpuprocess::scale_chain(lens.chain, factor));
+      }
+      for (size_t j = 0; j < l.lenses.size(); ++j) {
+        lenses[i].push_back(
+            {&lens_chains[i][j], l.lenses[j].lon, l.lenses[j].lat, l.lenses[j].radius_m});
+      }
+      global[i] = {man.stats.min, man.stats.max, man.stats.mean, man.stats.stddev};
+      const int up = a.level - keys[i].level;
+      const double tw = std::ldexp(l.store->grid().width(), -up),
+                   th = std::ldexp(l.store->grid().height(), -up);
+      gpuprocess::CompositeLayer c;
+      c.tile = tiles[i].get();
+      c.border = man.border;
+      c.chain = &chains[i];
+      c.stats = &global[i];
+      c.range_min = l.range_min, c.range_max = l.range_max;
+      c.colormap = l.colormap;
+      c.opacity = l.opacity;
+      c.window = {(a.x - (keys[i].x << up)) * tw, (a.y - (keys[i].y << up)) * th, tw, th};
+      c.lenses = lenses[i];
+      c.bounds = keys[i].bounds();
+      inputs.push_back(c);
+      ++stats.layer_tiles_processed;
+    }
+    RELIEF_CHECK(compositor_->composite(*gpu_, inputs, slots_.imagery().id(), slot, width, height));
+    glFinish();  // what processing costs, apart from drawing
+    stats.processing_seconds += std::chrono::duration<double>(Clock::now() - start).count();
+    made.layer = slot;
+    return made;
+  }
+
+  static constexpr int kMaxGridK = 11;            // 4097 x 2049 vertices per grid
+  static constexpr int kCompositesPerFrame = 16;  // interactive frames
 
   lod::TerrainModel& elevation_;
   const tiles::Store* imagery_;
   std::unique_ptr<lod::TileProvider> owned_imagery_tiles_;
+  std::vector<TextureLayer> layers_;  // texture layers, bottom first
+  std::vector<std::unique_ptr<lod::TileProvider>> owned_layer_tiles_;
+  size_t reference_ = 0;     // the layer whose tiles the composites follow
+  uint32_t version_ = 0;     // of the layers' parameters
+  int made_this_frame_ = 0;  // composites made by the frame being prepared
+  std::unique_ptr<gpuprocess::GpuProcessor> gpu_;
+  std::unique_ptr<gpuprocess::Compositor> compositor_;
   lod::TileProvider* imagery_tiles_ = nullptr;
   size_t max_quads_;  // records in a buffer texture
   gl::Program program_, capture_program_;
@@ -441,6 +612,47 @@ Result<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(lod::TerrainMod
       static_cast<size_t>(std::max(max_texels, 0)) * 16 / sizeof(QuadRecord));
   RELIEF_CHECK(r->init());
   return std::unique_ptr<TerrainRenderer>(std::move(r));
+}
+
+Result<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(lod::TerrainModel& elevation,
+                                                                 std::vector<TextureLayer> layers,
+                                                                 uint64_t gpu_budget) {
+  GLint max_layers = 0, max_texels = 0;
+  glGetIntegerv(GL_MAX_ARRAY_TEXTURE_LAYERS, &max_layers);
+  glGetIntegerv(GL_MAX_TEXTURE_BUFFER_SIZE, &max_texels);
+  auto r = std::make_unique<GlTerrainRenderer>(
+      elevation, nullptr, nullptr, gpu_budget, std::max(max_layers, 1),
+      static_cast<size_t>(std::max(max_texels, 0)) * 16 / sizeof(QuadRecord));
+  RELIEF_CHECK(r->init());
+  RELIEF_CHECK(r->init_layers(std::move(layers)));
+  return std::unique_ptr<TerrainRenderer>(std::move(r));
+}
+
+Status check_texture_layer(const TextureLayer& l) {
+  assert(l.store);
+  const std::string name = l.store->root().string();
+  RELIEF_CHECK(gpuprocess::check_chain_for(l.chain, l.store->manifest(), name));
+  if (!(l.range_min < l.range_max)) {
+    return fail(fmt::format("{}: the value range's minimum ({}) must be below its maximum ({})",
+                            name, l.range_min, l.range_max));
+  }
+  if (!(l.opacity >= 0 && l.opacity <= 1)) {
+    return fail(fmt::format("{}: opacity {} is not in [0, 1]", name, l.opacity));
+  }
+  for (const Lens& lens : l.lenses) {
+    if (!(lens.radius_m > 0) || !std::isfinite(lens.radius_m)) {
+      return fail(fmt::format("{}: a lens radius must be > 0 m, not {}", name, lens.radius_m));
+    }
+    if (!(std::abs(lens.lat) <= 90) || !(std::abs(lens.lon) <= 360)) {
+      return fail(fmt::format("{}: lens centre {},{} is not a longitude, latitude", name, lens.lon,
+                              lens.lat));
+    }
+    if (l.store->manifest().sample_type != tiles::SampleType::Float32) {
+      return fail(fmt::format("{}: lenses are for single-band stores, not RGBA imagery", name));
+    }
+    RELIEF_CHECK(gpuprocess::check_chain_for(lens.chain, l.store->manifest(), name + " (lens)"));
+  }
+  return {};
 }
 
 Result<std::vector<float>> capture_positions(TerrainRenderer& renderer, const lod::View& view,

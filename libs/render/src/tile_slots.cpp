@@ -69,7 +69,7 @@ Result<int> TileSlots::insert(const TextureKey& key, int width, int height, cons
   }
   const int layer = p.free.back();
   p.free.pop_back();
-  p.array.upload(layer, pixels, uploads);
+  if (pixels) p.array.upload(layer, pixels, uploads);
   order_.push_front(key);
   entries_.emplace(key, Entry{layer, bytes, frame_, order_.begin()});
   used_ += bytes;

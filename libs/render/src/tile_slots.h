@@ -19,12 +19,16 @@ namespace relief::render {
 struct TextureKey {
   geo::TileKey tile;
   bool imagery = false;
+  // Texture-layer composites: the layers' parameter version (an older one is
+  // never found again and ages out).
+  uint32_t version = 0;
   bool operator==(const TextureKey&) const = default;
 };
 
 struct TextureKeyHash {
   size_t operator()(const TextureKey& k) const {
-    return geo::TileKeyHash{}(k.tile) ^ (k.imagery ? 0x9e3779b97f4a7c15ULL : 0);
+    return geo::TileKeyHash{}(k.tile) ^ (k.imagery ? 0x9e3779b97f4a7c15ULL : 0) ^
+           (static_cast<size_t>(k.version) * 0xc2b2ae3d27d4eb4fULL);
   }
 };
 
@@ -42,7 +46,8 @@ class TileSlots {
   // colours) to a free layer, pinned for this frame, evicting unpinned tiles
   // while over budget and growing the array when no layer is free. Fails when
   // the tile's size differs from the store's others, or when this frame
-  // already pins every layer an array can have.
+  // already pins every layer an array can have. Null `pixels`: the caller
+  // writes the layer on the GPU (texture-layer composites).
   Result<int> insert(const TextureKey& key, int width, int height, const void* pixels,
                      gl::Uploads& uploads);
 

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <optional>
 
+#include <fmt/format.h>
+
 #include "relief/lod/split_feedback.h"
 #include "relief/stream/radius_pager.h"
 
@@ -35,12 +37,13 @@ bool moved(const lod::Camera& a, const lod::Camera& b) {
 }  // namespace
 
 struct Scene::Impl {
-  const tiles::Store& store;
+  const tiles::Store* store;  // null: the bare ellipsoid
   const tiles::Store* imagery;
   SceneOptions options;
   const Clock& clock;
   lod::MeshTopology mesh;
   std::unique_ptr<stream::TileLoader> loader, imagery_loader;
+  std::vector<std::unique_ptr<stream::TileLoader>> layer_loaders;  // interactive texture layers
   std::unique_ptr<lod::TerrainModel> terrain;
   std::unique_ptr<render::TerrainRenderer> renderer;
   std::unique_ptr<lod::RefineCache> refine_cache;  // edge-mark frames
@@ -50,7 +53,7 @@ struct Scene::Impl {
   std::optional<lod::RefinedMesh> last_refined;
   uint64_t imagery_misses = 0;  // a frame that missed imagery is not complete
 
-  Impl(const tiles::Store& s, const tiles::Store* i, const SceneOptions& o, const Clock& c)
+  Impl(const tiles::Store* s, const tiles::Store* i, const SceneOptions& o, const Clock& c)
       : store(s), imagery(i), options(o), clock(c), mesh(mesh_level(s, o)) {
     if (edge_marks()) {
       options.selection.neighbour_indices = true;  // refinement walks across quads
@@ -65,8 +68,8 @@ struct Scene::Impl {
   bool feeds_back() const { return edge_marks() && loader && options.split_feedback; }
 
   // The brute-force reference has one vertex per finest sample.
-  static int mesh_level(const tiles::Store& s, const SceneOptions& o) {
-    return o.full_resolution ? static_cast<int>(std::log2(s.grid().height())) : o.mesh_level;
+  static int mesh_level(const tiles::Store* s, const SceneOptions& o) {
+    return o.full_resolution && s ? static_cast<int>(std::log2(s->grid().height())) : o.mesh_level;
   }
 
   Status prefetch_along_motion(const lod::Camera& camera) {
@@ -90,25 +93,75 @@ Scene::~Scene() = default;
 Result<std::unique_ptr<Scene>> Scene::create(const tiles::Store& elevation,
                                              const tiles::Store* imagery,
                                              const SceneOptions& options, const Clock& clock) {
-  auto impl = std::make_unique<Impl>(elevation, imagery, options, clock);
+  return create(&elevation, imagery, options, clock);
+}
+
+Result<std::unique_ptr<Scene>> Scene::create(const tiles::Store* elevation,
+                                             const tiles::Store* imagery,
+                                             const SceneOptions& options, const Clock& clock) {
+  if (!options.texture_layers.empty() && imagery) {
+    return fail("an imagery store and texture layers: give the imagery as an RGBA layer");
+  }
+  for (const render::TextureLayer& l : options.texture_layers) {
+    RELIEF_CHECK(render::check_texture_layer(l));
+  }
+  SceneOptions o = options;
+  if (!elevation) {
+    // No heights to refine (edge marks need a store), and quads go down to
+    // the draped texture's finest level.
+    o.selection.mode = lod::LodMode::quads;
+    if (o.selection.texture && o.selection.max_level < 0) {
+      o.selection.max_level = o.selection.texture->manifest().max_level;
+    }
+  }
+  auto impl = std::make_unique<Impl>(elevation, imagery, o, clock);
+  std::vector<render::TextureLayer> layers = options.texture_layers;
   if (options.interactive) {
     stream::LoaderOptions lo = options.loader;
     lo.clock = &clock;
-    impl->loader = RELIEF_TRY(stream::TileLoader::create(elevation, lo));
-    impl->terrain = std::make_unique<lod::TerrainModel>(elevation, impl->mesh, *impl->loader);
-    // Diamond errors on the loader's threads, not in the frame that first draws a tile.
-    if (impl->refine_cache) impl->refine_cache->prepare_on_load(*impl->terrain);
-    if (imagery) {
-      lo.memory_budget = options.imagery_budget;
-      impl->imagery_loader = RELIEF_TRY(stream::TileLoader::create(*imagery, lo));
+    if (elevation) {
+      impl->loader = RELIEF_TRY(stream::TileLoader::create(*elevation, lo));
+      impl->terrain = std::make_unique<lod::TerrainModel>(*elevation, impl->mesh, *impl->loader);
+      // Diamond errors on the loader's threads, not in the frame that first draws a tile.
+      if (impl->refine_cache) impl->refine_cache->prepare_on_load(*impl->terrain);
+    } else {
+      impl->terrain = std::make_unique<lod::TerrainModel>(nullptr, impl->mesh, 0);
+    }
+    lo.memory_budget = options.imagery_budget;
+    if (imagery) impl->imagery_loader = RELIEF_TRY(stream::TileLoader::create(*imagery, lo));
+    for (render::TextureLayer& l : layers) {
+      impl->layer_loaders.push_back(RELIEF_TRY(stream::TileLoader::create(*l.store, lo)));
+      l.tiles = impl->layer_loaders.back().get();
     }
   } else {
     impl->terrain =
-        std::make_unique<lod::TerrainModel>(&elevation, impl->mesh, options.loader.memory_budget);
+        std::make_unique<lod::TerrainModel>(elevation, impl->mesh, options.loader.memory_budget);
+    for (render::TextureLayer& l : layers) l.tiles = nullptr;  // read when needed
   }
-  impl->renderer = RELIEF_TRY(render::TerrainRenderer::create(
-      *impl->terrain, imagery, options.gpu_budget, impl->imagery_loader.get()));
+  if (layers.empty()) {
+    impl->renderer = RELIEF_TRY(render::TerrainRenderer::create(
+        *impl->terrain, imagery, options.gpu_budget, impl->imagery_loader.get()));
+  } else {
+    impl->renderer = RELIEF_TRY(
+        render::TerrainRenderer::create(*impl->terrain, std::move(layers), options.gpu_budget));
+  }
   return std::unique_ptr<Scene>(new Scene(std::move(impl)));
+}
+
+Status Scene::set_texture_layers(std::vector<render::TextureLayer> layers) {
+  Impl& m = *impl_;
+  if (layers.size() != m.options.texture_layers.size()) {
+    return fail(fmt::format("{} texture layers given, the scene has {}", layers.size(),
+                            m.options.texture_layers.size()));
+  }
+  for (size_t i = 0; i < layers.size(); ++i) {
+    layers[i].tiles = m.layer_loaders.empty() ? nullptr : m.layer_loaders[i].get();
+  }
+  std::vector<render::TextureLayer> kept = layers;
+  RELIEF_CHECK(m.renderer->set_texture_layers(std::move(layers)));
+  for (render::TextureLayer& l : kept) l.tiles = nullptr;
+  m.options.texture_layers = std::move(kept);
+  return {};
 }
 
 Result<FrameReport> Scene::draw(const lod::Camera& camera, render::RenderTarget& target) {
@@ -124,7 +177,7 @@ Result<FrameReport> Scene::draw(const lod::Camera& camera, render::RenderTarget&
   RELIEF_CHECK(m.prefetch_along_motion(camera));
   if (m.loader && m.options.radius_tiles > 0) {
     m.loader->begin_frame();  // the pager's requests replace the view's
-    auto requested = stream::request_radius(*m.terrain, m.store, view.eye, m.options.radius_tiles);
+    auto requested = stream::request_radius(*m.terrain, *m.store, view.eye, m.options.radius_tiles);
     if (!requested) return std::unexpected(requested.error());
   }
   m.terrain->end_frame();
@@ -150,14 +203,16 @@ Result<FrameReport> Scene::draw(const lod::Camera& camera, render::RenderTarget&
     report.refine_cache_bytes = m.refine_cache->bytes();
   }
   if (m.imagery_loader) m.imagery_loader->begin_frame();  // the renderer requests imagery
+  for (auto& l : m.layer_loaders) l->begin_frame();
   auto frame =
       m.renderer->draw(view, selection, target, m.options.render, refined ? &*refined : nullptr);
   if (m.imagery_loader) m.imagery_loader->end_frame();
+  for (auto& l : m.layer_loaders) l->end_frame();
   report.draw = RELIEF_TRY(std::move(frame));
   report.frame_seconds = seconds_between(start, m.clock.now());
   report.cpu_seconds = report.frame_seconds - report.draw.gpu_seconds;
   report.selection = selection.stats;
-  report.complete = selection.stats.waiting == 0 && !wants_more;
+  report.complete = selection.stats.waiting == 0 && !wants_more && report.draw.texture_misses == 0;
   if (m.imagery_loader) {
     const stream::LoaderStats is = m.imagery_loader->stats();
     report.complete =
@@ -197,8 +252,9 @@ const lod::RefinedMesh* Scene::last_refined() const {
 Result<lod::MeasuredError> Scene::measure_last_frame(const lod::Camera& camera, int samples) {
   const lod::View view = RELIEF_TRY(lod::make_view(camera));
   // Interactive frames never wait for I/O: no tile is read to measure them.
+  if (!impl_->store) return lod::MeasuredError{};  // the bare ellipsoid: no data to miss
   return lod::measure_screen_error(view, *impl_->terrain, impl_->last,
-                                   impl_->store.manifest().extent, samples, last_refined(),
+                                   impl_->store->manifest().extent, samples, last_refined(),
                                    !impl_->options.interactive);
 }
 

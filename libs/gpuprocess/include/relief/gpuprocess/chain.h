@@ -10,6 +10,7 @@
 #include "relief/base/parallel.h"
 #include "relief/base/result.h"
 #include "relief/process/operators.h"
+#include "relief/tiles/manifest.h"
 #include "relief/tiles/raster.h"
 
 namespace relief::gpuprocess {
@@ -42,6 +43,14 @@ Status check_fits(const OperatorChain& chain, int border);
 // Global statistics needed (a dynamic-range step) but missing or without a
 // dynamic range, or a log mapping with t_max <= t_min: an error.
 Status check_stats(const OperatorChain& chain, const process::GlobalStats* stats);
+
+// Whether `chain` may run on the tiles of a store with manifest `m` (named
+// `name` in errors): operators need single-band stores, SAR operators a SAR
+// store; the chain, with parameters for the store's finest level, must fit its
+// border there (coarser levels have smaller masks), and the store's
+// statistics must suit the mappings. One-line errors.
+Status check_chain_for(const OperatorChain& chain, const tiles::Manifest& m,
+                       const std::string& name);
 
 // The CPU reference: `tile` is a Float32 single-band raster whose outer
 // `border` samples are overlap; the result is the tile's interior plus a

@@ -8,6 +8,7 @@
 // Thread safety: a processor belongs to the thread whose GL 4.5 core context
 // was current at create(); it is used on that thread, with that context
 // current, only.
+#include <cstdint>
 #include <memory>
 #include <string>
 
@@ -20,6 +21,14 @@ namespace relief::gpuprocess {
 
 // Whether operator `name` has a GPU implementation.
 bool runs_on_gpu(const std::string& name);
+
+// Where GpuProcessor::run_on_gpu() leaves its result: texels [offset, offset +
+// width) x [offset, offset + height) of the R32F texture `texture` (a GL
+// name) are the tile's interior plus a one-sample border.
+struct GpuTile {
+  uint32_t texture = 0;
+  int offset = 0, width = 0, height = 0;
+};
 
 class GpuProcessor {
  public:
@@ -36,6 +45,12 @@ class GpuProcessor {
   // statistics, or an operator without a GPU implementation.
   Result<tiles::Raster> run(const OperatorChain& chain, const tiles::Raster& tile, int border,
                             const process::GlobalStats* stats);
+
+  // The same without reading the result back (draw-time processing: the
+  // result is composited on the GPU). The texture is the processor's and
+  // holds the result until the next call of run() or run_on_gpu().
+  Result<GpuTile> run_on_gpu(const OperatorChain& chain, const tiles::Raster& tile, int border,
+                             const process::GlobalStats* stats);
 
  private:
   struct Impl;

@@ -14,8 +14,11 @@
 // Uses the GL context current on the calling thread; call from that thread only.
 #include <array>
 #include <memory>
+#include <vector>
 
 #include "relief/base/result.h"
+#include "relief/gpuprocess/chain.h"
+#include "relief/gpuprocess/composite.h"
 #include "relief/lod/refined_mesh.h"
 #include "relief/lod/selection.h"
 #include "relief/render/render_target.h"
@@ -45,7 +48,46 @@ struct FrameStats {
   // arrays (slots, resident or free) and their bytes.
   uint32_t gpu_textures = 0, uploads = 0, gpu_evicted = 0, gpu_slots = 0;
   uint64_t gpu_bytes = 0, gpu_budget = 0, gpu_allocated_bytes = 0;
+  // Texture layers: layer tiles processed by this frame (through their
+  // chains, composited), the seconds that took on the GPU (to glFinish), and
+  // the quads drawn with an ancestor's composite or none while theirs waits
+  // for a tile (a frame with any is not complete).
+  uint32_t layer_tiles_processed = 0, texture_misses = 0;
+  double processing_seconds = 0;
 };
+
+// A texture layer draped over the terrain (docs/gpu-processing.md,
+// "Draw-time processing"): a store's tiles through an operator chain, mapped
+// through [range_min, range_max] and a colour map (single-band stores; RGBA
+// imagery is drawn as it is), composited by opacity in the order given.
+// A lens over a texture layer (seed 003 §1.5.2): inside the circle (centre in
+// degrees, radius in metres on the ground) the layer's samples go through
+// `chain` (parameters for the store's finest level) instead of the layer's;
+// quads the edge crosses are processed by both and merged sample by sample.
+struct Lens {
+  double lon = 0, lat = 0, radius_m = 0;
+  gpuprocess::OperatorChain chain;
+};
+
+struct TextureLayer {
+  const tiles::Store* store = nullptr;
+  // Where tiles come from: a non-blocking provider for interactive frames
+  // (missing tiles are requested, ancestors shown meanwhile); null: read when
+  // needed.
+  lod::TileProvider* tiles = nullptr;
+  // Parameters for the store's finest level; coarser tiles get
+  // gpuprocess::scale_chain's, so masks keep their size on the ground.
+  gpuprocess::OperatorChain chain;
+  float range_min = 0, range_max = 1;
+  gpuprocess::ColorMap colormap = gpuprocess::ColorMap::grey;
+  float opacity = 1;
+  std::vector<Lens> lenses;  // single-band layers
+};
+
+// Whether a layer can be drawn: chain valid for the store (kind, border,
+// statistics), range_min < range_max, opacity in [0, 1], lenses of a positive
+// radius with valid chains on a single-band store. One-line errors.
+Status check_texture_layer(const TextureLayer& layer);
 
 class TerrainRenderer {
  public:
@@ -58,7 +100,17 @@ class TerrainRenderer {
   static Result<std::unique_ptr<TerrainRenderer>> create(
       lod::TerrainModel& elevation, const tiles::Store* imagery,
       uint64_t gpu_budget = uint64_t{1} << 30, lod::TileProvider* imagery_tiles = nullptr);
+  // With texture layers instead of one imagery store, composited per quad on
+  // the GPU (needs GL 4.5); the finest layer's store (the first of
+  // equally fine ones) sets the composites' tiles and their size.
+  static Result<std::unique_ptr<TerrainRenderer>> create(lod::TerrainModel& elevation,
+                                                         std::vector<TextureLayer> layers,
+                                                         uint64_t gpu_budget = uint64_t{1} << 30);
   virtual ~TerrainRenderer() = default;
+  // New layer parameters (same stores, count and order of layers as given to
+  // create()), from the next draw() on: no composite made with the old ones is
+  // drawn again.
+  virtual Status set_texture_layers(std::vector<TextureLayer> layers) = 0;
   // Draws `selection`, with the elevation model's mesh topology or, when
   // `refined` is given (parallel to selection.quads), its triangles.
   virtual Result<FrameStats> draw(const lod::View& view, const lod::Selection& selection,

@@ -13,6 +13,7 @@
 #include <functional>
 #include <memory>
 #include <optional>
+#include <vector>
 
 #include "relief/base/clock.h"
 #include "relief/base/result.h"
@@ -55,6 +56,12 @@ struct SceneOptions {
   double radius_tiles = 0;
   // Full-resolution mesh (brute force reference; stills only).
   bool full_resolution = false;
+  // Texture layers draped instead of the imagery store (which must then be
+  // null: give it as an RGBA layer), bottom first, processed and composited
+  // per quad on the GPU (docs/gpu-processing.md, "Draw-time processing").
+  // Their `tiles` are the scene's: loaders of `imagery_budget` each in
+  // interactive frames.
+  std::vector<render::TextureLayer> texture_layers;
 };
 
 struct FrameReport {
@@ -78,6 +85,10 @@ class Scene {
   static Result<std::unique_ptr<Scene>> create(const tiles::Store& elevation,
                                                const tiles::Store* imagery,
                                                const SceneOptions& options, const Clock& clock);
+  // `elevation` may be null: the bare ellipsoid, under texture layers.
+  static Result<std::unique_ptr<Scene>> create(const tiles::Store* elevation,
+                                               const tiles::Store* imagery,
+                                               const SceneOptions& options, const Clock& clock);
   ~Scene();
   Scene(const Scene&) = delete;
   Scene& operator=(const Scene&) = delete;
@@ -92,6 +103,11 @@ class Scene {
   // Changes that act from the next frame (the viewer's panels, speed-dependent LOD).
   void set_pixel_error(double pixels);
   void set_render_options(const render::RenderOptions& options);
+  // New parameters of the texture layers (chain, range, colour map, opacity;
+  // the same stores in the same order as options().texture_layers; their
+  // `tiles` are ignored): the next frame shows no tile processed with the
+  // old ones. The viewer's layer panels call this.
+  Status set_texture_layers(std::vector<render::TextureLayer> layers);
   lod::TerrainModel& terrain();
   const lod::Selection& last_selection() const;  // of the last draw()
   const lod::RefinedMesh* last_refined() const;  // of the last draw(), edge-mark frames
