@@ -81,7 +81,9 @@ class TextureLayersTest : public ::testing::Test {
     if (!s) return {};
     auto f = s->draw(kDown, *target_);
     EXPECT_TRUE(f) << f.error().message;
-    if (f) EXPECT_TRUE(f->complete);
+    if (f) {
+      EXPECT_TRUE(f->complete);
+    }
     auto pixels = target_->read_rgba();
     EXPECT_TRUE(pixels) << pixels.error().message;
     return pixels ? *pixels : std::vector<uint8_t>{};
