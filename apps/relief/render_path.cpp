@@ -271,8 +271,12 @@ int render_path(const Args& args, RenderSetup& setup, const Clock& clock) {
     frames.push_back(std::move(f));
     progress->advance();
     if (!options->frames) return {};
+    if (movie) {  // encoded while the next frame renders; rows flipped by the encoder
+      std::vector<uint8_t> pixels = movie->take_buffer();
+      RELIEF_CHECK((*target)->read_rgba_bottom_up(pixels));
+      return movie->write(std::move(pixels), video::RowOrder::bottom_first);
+    }
     std::vector<uint8_t> pixels = RELIEF_TRY((*target)->read_rgba());
-    if (movie) return movie->write(std::move(pixels));  // encoded while the next frame renders
     const std::string file =
         (std::filesystem::path(out) / fmt::format("frame_{:05d}.png", r.index)).string();
     return write_png(file, pixels, setup.width, setup.height);
