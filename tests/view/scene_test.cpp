@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <cmath>
 #include <thread>
 
 #include "../ingest/built_stores.h"
@@ -199,6 +200,68 @@ TEST_F(SceneTest, APathPlaysOneFramePerPeriodOfTheClockAndReportsItsCut) {
   EXPECT_GT(*summary->cuts[0].complete_after_s, 0.0);
   EXPECT_GT(summary->drawn_bytes, 0u);
   EXPECT_GE(summary->drawn_bytes, summary->final_view_bytes / 2);
+}
+
+// The LOD panel's freeze: frames draw the last selection from a camera that
+// moved (its culling and detail seen from outside) until thawed.
+TEST_F(SceneTest, AFrozenSelectionIsDrawnFromTheNewCamera) {
+  auto s = scene(false);
+  ASSERT_TRUE(s);
+  lod::Camera closer = kOblique;
+  closer.lon += 0.1;
+  closer.height *= 0.5;
+  auto moved = s->draw(closer, *target_);
+  ASSERT_TRUE(moved) << moved.error().message;
+  auto still = s->draw(kOblique, *target_);
+  ASSERT_TRUE(still) << still.error().message;
+  const std::vector<uint8_t> image = *target_->read_rgba();
+  ASSERT_NE(moved->selection.quads, still->selection.quads);  // else the test proves nothing
+
+  s->set_selection_frozen(true);
+  auto frozen = s->draw(closer, *target_);
+  ASSERT_TRUE(frozen) << frozen.error().message;
+  EXPECT_EQ(frozen->selection.quads, still->selection.quads);
+  EXPECT_EQ(frozen->draw.triangles, still->draw.triangles);
+  EXPECT_FALSE(frozen->complete);
+  EXPECT_EQ(s->last_selection().quads.size(), still->selection.quads);
+  auto back = s->draw(kOblique, *target_);  // the frozen selection from its own camera
+  ASSERT_TRUE(back);
+  EXPECT_EQ(*target_->read_rgba(), image);
+
+  s->set_selection_frozen(false);
+  auto thawed = s->draw(closer, *target_);
+  ASSERT_TRUE(thawed);
+  EXPECT_EQ(thawed->selection.quads, moved->selection.quads);
+  EXPECT_TRUE(thawed->complete);
+}
+
+// The LOD panel's wireframe: the same triangles as lines, the sky between them.
+TEST_F(SceneTest, WireframeDrawsTheTrianglesEdges) {
+  auto s = scene(false);
+  ASSERT_TRUE(s);
+  const render::RenderOptions filled = s->options().render;
+  auto sky_pixels = [&](const render::RenderOptions& o) {
+    s->set_render_options(o);
+    auto f = s->draw(kOblique, *target_);
+    EXPECT_TRUE(f) << f.error().message;
+    const std::vector<uint8_t> rgba = *target_->read_rgba();
+    const auto to_byte = [](float c) { return static_cast<uint8_t>(std::lround(c * 255)); };
+    size_t n = 0;
+    for (size_t i = 0; i < rgba.size(); i += 4) {
+      n += rgba[i] == to_byte(o.sky[0]) && rgba[i + 1] == to_byte(o.sky[1]) &&
+           rgba[i + 2] == to_byte(o.sky[2]);
+    }
+    return n;
+  };
+  render::RenderOptions wire = filled;
+  wire.wireframe = true;
+  const size_t solid = sky_pixels(filled), lines = sky_pixels(wire);
+  const size_t pixels =
+      static_cast<size_t>(kOblique.width) * static_cast<size_t>(kOblique.height_px);
+  EXPECT_LT(solid, pixels / 2);  // the oblique view is mostly ground
+  EXPECT_GT(lines, solid + pixels / 10);
+  EXPECT_LT(lines, pixels);              // edges were drawn
+  EXPECT_EQ(sky_pixels(filled), solid);  // and it is switched off again
 }
 
 TEST(Percentile, NearestRank) {

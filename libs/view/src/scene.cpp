@@ -49,6 +49,8 @@ struct Scene::Impl {
   lod::Selection last;
   std::optional<lod::RefinedMesh> last_refined;
   uint64_t imagery_misses = 0;  // a frame that missed imagery is not complete
+  bool frozen = false;          // set_selection_frozen()
+  bool drawn = false;           // a frame was drawn: `last` is its selection
 
   Impl(const tiles::Store& s, const tiles::Store* i, const SceneOptions& o, const Clock& c)
       : store(s), imagery(i), options(o), clock(c), mesh(mesh_level(s, o)) {
@@ -117,6 +119,19 @@ Result<FrameReport> Scene::draw(const lod::Camera& camera, render::RenderTarget&
   FrameReport report;
   report.camera = camera;
   const auto start = m.clock.now();
+  if (m.frozen && m.drawn) {  // the last frame's pins stay: no begin_frame()
+    const lod::RefinedMesh* refined = m.last_refined ? &*m.last_refined : nullptr;
+    if (m.imagery_loader) m.imagery_loader->begin_frame();  // the renderer requests imagery
+    auto frame = m.renderer->draw(view, m.last, target, m.options.render, refined);
+    if (m.imagery_loader) m.imagery_loader->end_frame();
+    report.draw = RELIEF_TRY(std::move(frame));
+    report.frame_seconds = seconds_between(start, m.clock.now());
+    report.cpu_seconds = report.frame_seconds - report.draw.gpu_seconds;
+    report.selection = m.last.stats;
+    if (refined) report.refine = refined->stats;
+    m.previous.reset();  // no motion to prefetch along when thawed
+    return report;
+  }
   m.terrain->begin_frame();
   lod::SelectionOptions so = m.options.selection;
   if (m.feeds_back()) so.also_split = m.split_feedback.for_selection(view, *m.terrain);
@@ -167,6 +182,7 @@ Result<FrameReport> Scene::draw(const lod::Camera& camera, render::RenderTarget&
   m.last = std::move(selection);
   m.last_refined = std::move(refined);
   m.previous = camera;
+  m.drawn = true;
   return report;
 }
 
@@ -183,6 +199,12 @@ void Scene::set_pixel_error(double pixels) {
 }
 void Scene::set_render_options(const render::RenderOptions& options) {
   impl_->options.render = options;
+}
+void Scene::set_selection_frozen(bool frozen) {
+  impl_->frozen = frozen;
+}
+bool Scene::selection_frozen() const {
+  return impl_->frozen;
 }
 lod::TerrainModel& Scene::terrain() {
   return *impl_->terrain;

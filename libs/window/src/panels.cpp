@@ -40,6 +40,12 @@ void level_of_detail(Viewer::Impl& v) {
     v.speed_lod = view::SpeedLod(v.options.speed_lod);
   }
   text(fmt::format("threshold now {:.2f} px (x{:.2f})", v.threshold, v.speed_lod.factor()));
+  if (ImGui::Checkbox("wireframe", &v.scene_options.render.wireframe)) {
+    v.scene->set_render_options(v.scene_options.render);
+  }
+  // The last selection keeps being drawn while the camera moves: its
+  // culling and detail seen from outside.
+  if (ImGui::Checkbox("freeze selection", &v.frozen)) v.scene->set_selection_frozen(v.frozen);
 }
 
 void loader_lines(const char* name, stream::TileLoader* loader, const LoadRate& rate) {

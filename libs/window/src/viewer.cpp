@@ -30,6 +30,7 @@ Status Viewer::Impl::make_scene() {
   const tiles::Store* layer = imagery_on ? imagery : nullptr;
   if (!layer) so.selection.texture = nullptr;
   scene = RELIEF_TRY(view::Scene::create(elevation, layer, so, clock));
+  scene->set_selection_frozen(frozen);  // a new scene has no selection yet: frozen from its first
   progress = {};
   return {};
 }

@@ -66,6 +66,7 @@ struct Viewer::Impl {
   std::unique_ptr<view::Controller> controller;
   view::SpeedLod speed_lod;
   double threshold = 1;  // this frame's pixel error
+  bool frozen = false;   // the LOD panel's "freeze selection"
 
   std::optional<Clock::TimePoint> start, last;
   double time = 0;

@@ -92,6 +92,12 @@ class Scene {
   // Changes that act from the next frame (the viewer's panels, speed-dependent LOD).
   void set_pixel_error(double pixels);
   void set_render_options(const render::RenderOptions& options);
+  // Frozen: frames draw the last frame's selection (and refined mesh) from
+  // the new camera, without selecting, requesting or prefetching, so culling
+  // and level of detail can be inspected from outside (the LOD panel). Its
+  // tiles stay pinned. Frozen frames are never complete.
+  void set_selection_frozen(bool frozen);
+  bool selection_frozen() const;
   lod::TerrainModel& terrain();
   const lod::Selection& last_selection() const;  // of the last draw()
   const lod::RefinedMesh* last_refined() const;  // of the last draw(), edge-mark frames
