@@ -1,6 +1,7 @@
 #include "relief/window/viewer.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <filesystem>
 
@@ -40,8 +41,8 @@ namespace {
 // Keys the viewer keeps: neither their press nor their release reaches the controller.
 bool viewer_key(view::Key key) {
   using view::Key;
-  return key == Key::tab || key == Key::f1 || key == Key::f8 || key == Key::f9 || key == Key::f11 ||
-         key == Key::f12 || key == Key::escape;
+  return key == Key::tab || key == Key::f1 || key == Key::f8 || key == Key::f9 || key == Key::f10 ||
+         key == Key::f11 || key == Key::f12 || key == Key::escape;
 }
 
 }  // namespace
@@ -59,6 +60,9 @@ void Viewer::Impl::on_window_key(view::Key key) {
     case Key::f9:
       recording = !recording;
       record_cut = recording && !recorded.empty();  // a resumed recording jumps
+      break;
+    case Key::f10:
+      export_recorded();
       break;
     case Key::f11:
       window.toggle_fullscreen();
@@ -90,6 +94,31 @@ void Viewer::Impl::record(const lod::Camera& camera) {
   if (!recorded.empty() && !(time > recorded.back().time)) return;
   recorded.push_back({time, camera, record_cut});
   record_cut = false;
+}
+
+bool Viewer::Impl::export_recorded() {
+  poll_export();
+  if (export_job.valid()) return false;  // the running export's line stays
+  if (!options.export_path) {
+    export_status = "nothing to export to";
+    return false;
+  }
+  if (recorded.empty()) {
+    export_status = "nothing recorded (F9 starts recording)";
+    return false;
+  }
+  export_status = fmt::format("exporting {} keyframes...", recorded.size());
+  // A copy: recording goes on while the export runs.
+  export_job = std::async(std::launch::async, options.export_path,
+                          view::PathFile{options.record_fps, recorded});
+  return true;
+}
+
+void Viewer::Impl::poll_export() {
+  using namespace std::chrono_literals;
+  if (!export_job.valid() || export_job.wait_for(0s) != std::future_status::ready) return;
+  const Status st = export_job.get();
+  export_status = st ? "exported" : "export failed: " + st.error().message;
 }
 
 Status Viewer::Impl::write_screenshot(const std::string& path) {
@@ -135,12 +164,15 @@ Result<std::unique_ptr<Viewer>> Viewer::create(Window& window, const tiles::Stor
 Viewer::Viewer(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 
 Viewer::~Viewer() {
-  if (impl_) impl_->window.set_input_handler({});
+  if (!impl_) return;
+  impl_->window.set_input_handler({});
+  if (impl_->export_job.valid()) impl_->export_job.wait();  // it uses the stores
 }
 
 Result<bool> Viewer::frame() {
   Impl& v = *impl_;
   v.window.poll_events();
+  v.poll_export();
   if (v.quit || v.window.should_close()) return false;
   const Clock::TimePoint now = v.clock.now();
   if (!v.start) v.start = v.last = now;
@@ -247,6 +279,18 @@ bool Viewer::panels_visible() const {
 
 bool Viewer::recording() const {
   return impl_->recording;
+}
+
+bool Viewer::export_recorded() {
+  return impl_->export_recorded();
+}
+
+Status Viewer::wait_for_export() {
+  Impl& v = *impl_;
+  if (!v.export_job.valid()) return {};
+  const Status st = v.export_job.get();
+  v.export_status = st ? "exported" : "export failed: " + st.error().message;
+  return st;
 }
 
 Status Viewer::screenshot(const std::string& path) {

@@ -2,6 +2,7 @@
 // The viewer's state, shared by its loop (viewer.cpp) and its panels
 // (panels.cpp).
 #include <deque>
+#include <future>
 #include <memory>
 #include <optional>
 #include <string>
@@ -75,6 +76,8 @@ struct Viewer::Impl {
 
   bool recording = false, record_cut = false;
   std::vector<lod::Keyframe> recorded;
+  std::future<Status> export_job;  // export_recorded()'s, while running
+  std::string export_status;       // the Path panel's line
 
   size_t index = 0;
   std::optional<view::FrameReport> report;  // the last frame's
@@ -93,6 +96,8 @@ struct Viewer::Impl {
   void on_input(const view::InputEvent& e);
   void on_window_key(view::Key key);
   void record(const lod::Camera& camera);
+  bool export_recorded();
+  void poll_export();      // a finished export's status into export_status
   void take_screenshot();  // F12: the next free relief_NNNN.png in screenshot_dir
   Status write_screenshot(const std::string& path);
 };

@@ -9,7 +9,8 @@
 // Keys the viewer keeps for itself (everything else goes to the controller):
 //   Tab, F1  panels on/off        F8   vsync on/off
 //   F9       recording on/off     F11  fullscreen
-//   F12      screenshot (PNG)     Escape  quit
+//   F10      export recorded path F12  screenshot (PNG)     Escape  quit
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -19,6 +20,7 @@
 #include "relief/base/result.h"
 #include "relief/lod/camera_path.h"
 #include "relief/view/controller.h"
+#include "relief/view/path_file.h"
 #include "relief/view/scene.h"
 #include "relief/view/speed_lod.h"
 #include "relief/window/window.h"
@@ -39,6 +41,11 @@ struct ViewerOptions {
   std::string screenshot_dir = ".";
   bool panels = true;
   bool collect_frames = false;  // keep every frame's record (for --stats)
+  // "Export recorded path" (F10, the Path panel's button): called on a
+  // thread of its own with the path recorded so far while frames keep
+  // drawing (`relief view` writes it and, with --export-movie, renders it as
+  // a movie). Null: nothing to export to.
+  std::function<Status(const view::PathFile& path)> export_path;
 };
 
 // One frame as the statistics see it.
@@ -93,6 +100,12 @@ class Viewer {
   view::Scene& scene();
   bool panels_visible() const;
   bool recording() const;
+  // Starts export_path with the path recorded so far (F10). False, with the
+  // reason in the Path panel, when an export is running, nothing was
+  // recorded or there is no export_path.
+  bool export_recorded();
+  // Waits for the running export, if any, and returns its status.
+  Status wait_for_export();
   // The last frame's pixels (terrain only) as a PNG, atomically.
   Status screenshot(const std::string& path);
 
