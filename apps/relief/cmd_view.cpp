@@ -161,6 +161,7 @@ nlohmann::json stats_json(const window::ViewerSummary& s, const std::string& ren
   }
   auto fps = [](double ms) { return ms > 0 ? 1e3 / ms : 0.0; };
   nlohmann::json summary = {{"frames", s.frames},
+                            {"skipped_frames", s.skipped_frames},
                             {"seconds", s.seconds},
                             {"fps_p50", fps(s.p50_frame_ms)},
                             {"fps_p99", fps(s.p99_frame_ms)},  // the fps of the p99 frame time

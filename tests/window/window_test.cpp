@@ -271,6 +271,58 @@ TEST_F(WindowTest, F10ExportsTheRecordedPathOnAThreadOfItsOwn) {
   EXPECT_EQ(exported.size(), 2u);
 }
 
+// Idle: once the camera is still and its frame complete, frame() waits for
+// events instead of drawing; an event draws one frame, then it idles again.
+// Never while recording.
+TEST_F(WindowTest, AStillCompleteViewIsNotRedrawnUntilAnEventComes) {
+  ManualClock clock;
+  ViewerOptions o;
+  o.start = kCamera;
+  o.idle_wait_seconds = 0.001;
+  auto v = viewer(o, clock);
+  ASSERT_TRUE(v);
+  // Until complete: frames draw while tiles arrive.
+  for (int i = 0; i < 6000 && v->summary().skipped_frames == 0; ++i) {
+    ASSERT_TRUE(v->frame());
+    clock.advance(10ms);
+    std::this_thread::sleep_for(1ms);
+  }
+  ViewerSummary s = v->summary();
+  ASSERT_GT(s.skipped_frames, 0u);
+  EXPECT_TRUE(s.complete);
+  const size_t drawn = s.frames;
+  for (int i = 0; i < 20; ++i) {
+    ASSERT_TRUE(v->frame());
+    clock.advance(10ms);
+  }
+  s = v->summary();
+  EXPECT_EQ(s.frames, drawn) << "nothing changed: nothing drawn";
+  EXPECT_EQ(s.skipped_frames, 21u);
+  EXPECT_DOUBLE_EQ(s.seconds, v->summary().seconds);
+
+  // The cursor moves: two frames (the panels show some input a frame
+  // late), then idle again.
+  view::InputEvent e;
+  e.type = Type::cursor;
+  e.x = 10, e.y = 10;
+  window_->deliver(e);
+  for (int i = 0; i < 3; ++i) ASSERT_TRUE(v->frame());
+  s = v->summary();
+  EXPECT_EQ(s.frames, drawn + 2);
+  EXPECT_EQ(s.skipped_frames, 22u);
+
+  e.type = Type::key_down;  // recording: every frame is drawn (and recorded)
+  e.key = view::Key::f9;
+  window_->deliver(e);
+  for (int i = 0; i < 5; ++i) {
+    clock.advance(10ms);
+    ASSERT_TRUE(v->frame());
+  }
+  s = v->summary();
+  EXPECT_EQ(s.frames, drawn + 7);
+  EXPECT_EQ(s.recorded.size(), 5u);
+}
+
 size_t differing_pixels(const std::vector<uint8_t>& a, const std::vector<uint8_t>& b) {
   size_t n = 0;
   for (size_t i = 0; i + 3 < std::min(a.size(), b.size()); i += 4) {

@@ -16,7 +16,13 @@ namespace relief::window {
 
 namespace {
 constexpr size_t kRecentFrames = 120;  // the panels' statistics window
+
+bool same_camera(const lod::Camera& a, const lod::Camera& b) {
+  return a.lon == b.lon && a.lat == b.lat && a.height == b.height && a.heading == b.heading &&
+         a.pitch == b.pitch && a.roll == b.roll && a.fov_y == b.fov_y && a.width == b.width &&
+         a.height_px == b.height_px;
 }
+}  // namespace
 
 Status write_png(const std::string& path, std::span<const uint8_t> rgba, int width, int height) {
   tiles::Raster image(tiles::SampleType::UInt8, 4, width, height);
@@ -171,10 +177,23 @@ Viewer::~Viewer() {
 
 Result<bool> Viewer::frame() {
   Impl& v = *impl_;
-  v.window.poll_events();
+  if (v.idle) {
+    v.window.wait_events(v.options.idle_wait_seconds);
+  } else {
+    v.window.poll_events();
+  }
   v.poll_export();
   if (v.quit || v.window.should_close()) return false;
   const Clock::TimePoint now = v.clock.now();
+  if (v.idle && v.window.events() == v.drawn_events && v.export_status == v.drawn_export_status) {
+    v.last = now;  // time passes without frames: the next step starts from here
+    v.time = seconds_between(*v.start, now);
+    ++v.skipped;
+    return true;
+  }
+  // A frame after events draws, and so does the next: Dear ImGui shows the
+  // effect of some input (hover, a release) one frame later.
+  const bool quiet = v.window.events() == v.drawn_events;
   if (!v.start) v.start = v.last = now;
   const double dt = seconds_between(*v.last, now);
   v.last = now;
@@ -197,6 +216,12 @@ Result<bool> Viewer::frame() {
   const view::FrameReport report = RELIEF_TRY(v.scene->draw(camera, target));
   v.report = report;
   if (v.recording) v.record(camera);
+  const bool playing =
+      v.controller->mode() == view::ControlMode::playback && !v.controller->finished();
+  v.idle = v.options.idle_wait_seconds > 0 && quiet && !v.recording && !playing && v.drawn_camera &&
+           same_camera(*v.drawn_camera, camera) &&
+           ((report.complete && v.threshold <= still) || v.frozen);
+  v.drawn_camera = camera;
 
   if (v.index > 0) {
     v.frame_ms.push_back(dt * 1e3);
@@ -224,6 +249,8 @@ Result<bool> Viewer::frame() {
     v.window.present({});
   }
   ++v.index;
+  v.drawn_events = v.window.events();  // what the panels took while drawn included
+  v.drawn_export_status = v.export_status;
 
   if (v.options.exit_when_done) {
     const bool path_done =
@@ -249,6 +276,7 @@ ViewerSummary Viewer::summary() const {
   const Impl& v = *impl_;
   ViewerSummary s;
   s.frames = v.index;
+  s.skipped_frames = v.skipped;
   s.seconds = v.time;
   s.p50_frame_ms = view::percentile(v.frame_ms, 0.5);
   s.p99_frame_ms = view::percentile(v.frame_ms, 0.99);

@@ -80,6 +80,11 @@ struct Viewer::Impl {
   std::string export_status;       // the Path panel's line
 
   size_t index = 0;
+  size_t skipped = 0;                       // frames not drawn: idle
+  bool idle = false;                        // the last frame: still and complete
+  std::optional<lod::Camera> drawn_camera;  // the last frame's
+  uint64_t drawn_events = 0;                // window events when the last frame was drawn
+  std::string drawn_export_status;          // export_status then
   std::optional<view::FrameReport> report;  // the last frame's
   std::vector<double> frame_ms;             // every frame's but the first
   std::deque<double> recent_ms;             // the panels' window

@@ -41,6 +41,12 @@ struct ViewerOptions {
   std::string screenshot_dir = ".";
   bool panels = true;
   bool collect_frames = false;  // keep every frame's record (for --stats)
+  // Idle: once the camera is still and its frame complete (at the still
+  // threshold, or the selection frozen), frame() waits up to this long for
+  // an event instead of drawing, and draws again only when one came (input,
+  // a resize, an exposure) or an export finished. Not while recording (the
+  // path would glide through the pause) or playing a path. 0: always draw.
+  double idle_wait_seconds = 0.25;
   // "Export recorded path" (F10, the Path panel's button): called on a
   // thread of its own with the path recorded so far while frames keep
   // drawing (`relief view` writes it and, with --export-movie, renders it as
@@ -64,7 +70,8 @@ struct ViewerFrame {
 };
 
 struct ViewerSummary {
-  size_t frames = 0;
+  size_t frames = 0;          // drawn
+  size_t skipped_frames = 0;  // frame() calls that drew nothing: idle, nothing changed
   double seconds = 0;
   double p50_frame_ms = 0, p99_frame_ms = 0;  // over every frame but the first
   bool complete = false;                      // the last frame
