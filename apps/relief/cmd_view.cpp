@@ -191,7 +191,8 @@ Status export_recorded_path(const Args& args, RenderSetup& setup, const view::Pa
   std::fprintf(stderr, "relief: wrote the recorded path to %s\n", file.c_str());
   auto movie = args.get("--export-movie");
   if (!movie) return {};
-  auto render_args = Args::parse({"--path", file.string(), "-o", *movie},
+  // The store too: a remote one is exported with the path prefetched.
+  auto render_args = Args::parse({args.positional()[0], "--path", file.string(), "-o", *movie},
                                  {{"--path"}, {"--output", "-o"}}, "view");
   if (!render_args) return std::unexpected(render_args.error());
   if (render_path(*render_args, setup) != 0) {  // its error is on stderr

@@ -264,6 +264,45 @@ TEST_F(SceneTest, WireframeDrawsTheTrianglesEdges) {
   EXPECT_EQ(sky_pixels(filled), solid);  // and it is switched off again
 }
 
+// Movie export over an interactive scene: each frame waits for its tiles
+// (loaded, decoded and measured on the loaders' threads, the coming frames'
+// prefetched) and is then exactly the complete scene's frame.
+TEST_F(SceneTest, WaitingForCompleteFramesDrawsTheCompleteScenesFrames) {
+  lod::Camera far = kOblique;
+  far.lon += 0.2;
+  far.height *= 0.6;
+  const std::vector<lod::Keyframe> keys = {{0.0, kOblique, false}, {1.0, far, false}};
+  constexpr size_t kFrames = 5;
+  auto frames_of = [&](Scene& s, const PathOptions& o) {
+    std::vector<std::vector<uint8_t>> images;
+    PathCallbacks callbacks;
+    callbacks.frame_done = [&](const FrameRecord& r) -> Status {
+      EXPECT_TRUE(r.report.complete) << "frame " << r.index;
+      images.push_back(RELIEF_TRY(target_->read_rgba()));
+      return {};
+    };
+    auto summary = play_path(s, keys, kFrames, o, *target_, clock_, callbacks);
+    EXPECT_TRUE(summary) << summary.error().message;
+    return images;
+  };
+  PathOptions o;
+  o.fps = 4;
+  auto complete = scene(false);
+  ASSERT_TRUE(complete);
+  const auto expected = frames_of(*complete, o);
+  ASSERT_EQ(expected.size(), kFrames);
+
+  auto live = scene(true);
+  ASSERT_TRUE(live);
+  o.wait_complete = true;
+  const auto frames = frames_of(*live, o);
+  ASSERT_EQ(frames.size(), kFrames);
+  for (size_t i = 0; i < kFrames; ++i) EXPECT_TRUE(frames[i] == expected[i]) << "frame " << i;
+  const stream::LoaderStats ls = live->elevation_loader()->stats();
+  EXPECT_GT(ls.prefetched, 0u) << "the coming frames' tiles were prefetched";
+  EXPECT_EQ(ls.failed, 0u);
+}
+
 TEST(Percentile, NearestRank) {
   EXPECT_EQ(percentile({}, 0.5), 0.0);
   EXPECT_EQ(percentile({3, 1, 2}, 0.5), 2.0);

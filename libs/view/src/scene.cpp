@@ -48,9 +48,10 @@ struct Scene::Impl {
   std::optional<lod::Camera> previous;             // of the last frame, unless cut
   lod::Selection last;
   std::optional<lod::RefinedMesh> last_refined;
-  uint64_t imagery_misses = 0;  // a frame that missed imagery is not complete
-  bool frozen = false;          // set_selection_frozen()
-  bool drawn = false;           // a frame was drawn: `last` is its selection
+  uint64_t imagery_misses = 0;                 // a frame that missed imagery is not complete
+  std::optional<lod::Camera> prefetch_camera;  // set_prefetch_camera()
+  bool frozen = false;                         // set_selection_frozen()
+  bool drawn = false;                          // a frame was drawn: `last` is its selection
 
   Impl(const tiles::Store& s, const tiles::Store* i, const SceneOptions& o, const Clock& c)
       : store(s), imagery(i), options(o), clock(c), mesh(mesh_level(s, o)) {
@@ -72,6 +73,15 @@ struct Scene::Impl {
   }
 
   Status prefetch_along_motion(const lod::Camera& camera) {
+    if (loader && prefetch_camera) {  // the known path's coming frame
+      auto ahead = lod::make_view(*prefetch_camera);
+      if (!ahead) return {};
+      loader->set_prefetch(true);
+      auto predicted = lod::select_quads(*ahead, *terrain, options.selection);
+      loader->set_prefetch(false);
+      if (!predicted) return std::unexpected(predicted.error());
+      return {};
+    }
     if (!loader || !options.prefetch || !previous) return {};
     const bool jumped =
         std::abs(camera.lon - previous->lon) + std::abs(camera.lat - previous->lat) > 1;
@@ -184,6 +194,23 @@ Result<FrameReport> Scene::draw(const lod::Camera& camera, render::RenderTarget&
   m.previous = camera;
   m.drawn = true;
   return report;
+}
+
+void Scene::set_prefetch_camera(std::optional<lod::Camera> camera) {
+  impl_->prefetch_camera = camera;
+}
+
+Result<uint32_t> Scene::request(const lod::Camera& camera) {
+  Impl& m = *impl_;
+  assert(m.loader);  // interactive scenes only
+  const lod::View view = RELIEF_TRY(lod::make_view(camera));
+  m.terrain->begin_frame();
+  lod::SelectionOptions so = m.options.selection;
+  if (m.feeds_back()) so.also_split = m.split_feedback.for_selection(view, *m.terrain);
+  const lod::Selection selection = RELIEF_TRY(lod::select_quads(view, *m.terrain, so));
+  RELIEF_CHECK(m.prefetch_along_motion(camera));
+  m.terrain->end_frame();
+  return selection.stats.waiting;
 }
 
 void Scene::cut() {

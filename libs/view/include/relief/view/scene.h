@@ -89,6 +89,15 @@ class Scene {
   void cut();
 
   const SceneOptions& options() const;
+  // A known path (movie export): every interactive frame also requests, at
+  // prefetch priority, what the selection of this camera of a coming frame
+  // wants, instead of extrapolating the motion. nullopt: back to that.
+  void set_prefetch_camera(std::optional<lod::Camera> camera);
+  // Interactive scenes: the selection of `camera` and its requests (with the
+  // prefetch camera's), without drawing. Returns the quads still waiting for
+  // elevation data (0: a draw() of `camera` now needs no more).
+  Result<uint32_t> request(const lod::Camera& camera);
+
   // Changes that act from the next frame (the viewer's panels, speed-dependent LOD).
   void set_pixel_error(double pixels);
   void set_render_options(const render::RenderOptions& options);
