@@ -5,6 +5,7 @@
 // was complete.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <thread>
@@ -301,6 +302,40 @@ TEST_F(SceneTest, WaitingForCompleteFramesDrawsTheCompleteScenesFrames) {
   const stream::LoaderStats ls = live->elevation_loader()->stats();
   EXPECT_GT(ls.prefetched, 0u) << "the coming frames' tiles were prefetched";
   EXPECT_EQ(ls.failed, 0u);
+}
+
+// The movie export's read-back: GL's bottom-up rows into a reused buffer,
+// the image of read_rgba() flipped; a target without its own (the window's
+// wrapper) gets the same from the default.
+TEST_F(SceneTest, BottomUpReadBackIsTheImageFlipped) {
+  auto s = scene(false);
+  ASSERT_TRUE(s);
+  ASSERT_TRUE(s->draw(kOblique, *target_));
+  const std::vector<uint8_t> top_down = *target_->read_rgba();
+  std::vector<uint8_t> flipped(top_down.size());
+  const size_t row = static_cast<size_t>(kOblique.width) * 4;
+  for (int y = 0; y < kOblique.height_px; ++y) {
+    std::copy_n(&top_down[static_cast<size_t>(kOblique.height_px - 1 - y) * row], row,
+                &flipped[static_cast<size_t>(y) * row]);
+  }
+  ASSERT_NE(flipped, top_down);  // sky above, ground below
+  std::vector<uint8_t> buffer(top_down.size(), 7);
+  const uint8_t* storage = buffer.data();
+  ASSERT_TRUE(target_->read_rgba_bottom_up(buffer));
+  EXPECT_EQ(buffer, flipped);
+  EXPECT_EQ(buffer.data(), storage) << "the buffer is reused";
+
+  struct Wrapper final : render::RenderTarget {
+    render::RenderTarget& inner;
+    explicit Wrapper(render::RenderTarget& t) : inner(t) {}
+    int width() const override { return inner.width(); }
+    int height() const override { return inner.height(); }
+    void bind() override { inner.bind(); }
+    Result<std::vector<uint8_t>> read_rgba() override { return inner.read_rgba(); }
+  } wrapper(*target_);
+  std::vector<uint8_t> by_default;
+  ASSERT_TRUE(wrapper.read_rgba_bottom_up(by_default));
+  EXPECT_EQ(by_default, flipped);
 }
 
 TEST(Percentile, NearestRank) {
