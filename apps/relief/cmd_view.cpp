@@ -13,6 +13,7 @@
 #include "relief/view/path_file.h"
 #include "relief/window/viewer.h"
 #include "relief/window/window.h"
+#include "render_path.h"
 #include "render_setup.h"
 #include "texture_options.h"
 
@@ -29,8 +30,9 @@ and flies over an elevation store. Frames never wait for I/O: they draw what
 is resident while worker threads load what the view asks for. Without a
 display, `relief render` draws stills and camera paths headless.
 
-Keys: Tab or F1 panels, F8 vsync, F9 start/stop recording, F11 fullscreen,
-F12 screenshot (terrain only, PNG), Escape quit; the control mode takes the rest.
+Keys: Tab or F1 panels, F8 vsync, F9 start/stop recording, F10 export the
+recorded path, F11 fullscreen, F12 screenshot (terrain only, PNG), Escape quit;
+the control mode takes the rest.
 
   --camera LON,LAT,HEIGHT,HEADING,PITCH,ROLL   the start (as relief render)
   --look-at LON,LAT,HEIGHT,RANGE,HEADING,PITCH  (default: the whole store)
@@ -51,6 +53,9 @@ options:
   --stats FILE       per-frame statistics and a summary as JSON, written at exit
   --record FILE      record the camera of every frame to a path JSON, written at
                      exit (F9 pauses and resumes)
+  --export-movie FILE.mp4  F10 (and the end of an --exit-when-done session)
+                     renders the recorded path as this movie, as relief render
+                     --path P -o FILE.mp4 does (complete frames, window size)
   --screenshot FILE  write the last frame (terrain only) as PNG at exit
   --screenshot-dir DIR  where F12 writes relief_NNNN.png (default .)
   --no-panels        start with the panels hidden
@@ -81,7 +86,10 @@ Status check_view_outputs(const Args& args, const std::vector<std::string>& text
   }
   for (const std::string& p : args.get_all("--elevation")) inputs.push_back(p);
   std::vector<Output> outputs;
-  for (const char* name : {"--stats", "--record", "--screenshot"}) {
+  if (auto movie = args.get("--export-movie"); movie && !is_movie_output(*movie)) {
+    return fail("--export-movie: " + *movie + ": not a movie (FILE.mp4)");
+  }
+  for (const char* name : {"--stats", "--record", "--screenshot", "--export-movie"}) {
     if (auto p = args.get(name)) {
       RELIEF_CHECK(check_writable(name, *p));
       outputs.push_back({name, *p});
@@ -160,6 +168,7 @@ nlohmann::json stats_json(const window::ViewerSummary& s, const std::string& ren
   }
   auto fps = [](double ms) { return ms > 0 ? 1e3 / ms : 0.0; };
   nlohmann::json summary = {{"frames", s.frames},
+                            {"skipped_frames", s.skipped_frames},
                             {"seconds", s.seconds},
                             {"fps_p50", fps(s.p50_frame_ms)},
                             {"fps_p99", fps(s.p99_frame_ms)},  // the fps of the p99 frame time
@@ -171,9 +180,40 @@ nlohmann::json stats_json(const window::ViewerSummary& s, const std::string& ren
   return {{"summary", summary}, {"frames", frames}};
 }
 
+// "Export recorded path": the path to --record FILE (else the next free
+// relief_path_NNNN.json in --screenshot-dir) and, with --export-movie, the
+// movie rendered by the code of `relief render --path P -o MOVIE.mp4`. Runs
+// on the viewer's export thread (render_path makes its own headless context).
+Status export_recorded_path(const Args& args, RenderSetup& setup, const view::PathFile& path) {
+  std::filesystem::path file;
+  if (auto record = args.get("--record")) {
+    file = *record;
+  } else {
+    const std::filesystem::path dir = args.get("--screenshot-dir").value_or(".");
+    for (int n = 0; file.empty() || std::filesystem::exists(file); ++n) {
+      file = dir / fmt::format("relief_path_{:04d}.json", n);
+    }
+  }
+  RELIEF_CHECK(view::write_path_file(file.string(), path));
+  std::fprintf(stderr, "relief: wrote the recorded path to %s\n", file.c_str());
+  auto movie = args.get("--export-movie");
+  if (!movie) return {};
+  // The store too: a remote one is exported with the path prefetched.
+  auto render_args = Args::parse({args.positional()[0], "--path", file.string(), "-o", *movie},
+                                 {{"--path"}, {"--output", "-o"}}, "view");
+  if (!render_args) return std::unexpected(render_args.error());
+  if (render_path(*render_args, setup) != 0) {  // its error is on stderr
+    return fail("--export-movie: " + *movie + ": the export failed");
+  }
+  return {};
+}
+
 int view_session(const Args& args, RenderSetup& setup) {
   auto options = viewer_options(args, setup);
   if (!options) return report_error(options.error().message);
+  options->export_path = [&args, &setup](const view::PathFile& path) {
+    return export_recorded_path(args, setup, path);
+  };
   view::SceneOptions so = scene_options(setup);
   so.interactive = true;
   so.loader.memory_budget = uint64_t{512} << 20;
@@ -192,6 +232,15 @@ int view_session(const Args& args, RenderSetup& setup) {
   if (!viewer) return report_error(viewer.error().message);
   auto summary = (*viewer)->run();
   if (!summary) return report_error(summary.error().message);
+  Status exported = (*viewer)->wait_for_export();  // an F10 export still running
+  // A scripted session with --export-movie exports what it recorded.
+  if (exported && args.get("--export-movie") && options->exit_when_done) {
+    if (!(*viewer)->export_recorded()) {
+      return report_error("--export-movie: nothing was recorded (--record FILE records)");
+    }
+    exported = (*viewer)->wait_for_export();
+  }
+  if (!exported) return report_error(exported.error().message);
 
   if (auto path = args.get("--screenshot")) {
     if (auto st = (*viewer)->screenshot(*path); !st) return report_error(st.error().message);
@@ -242,6 +291,7 @@ int run_view(const std::vector<std::string>& command_line) {
                            {"--record"},
                            {"--screenshot"},
                            {"--screenshot-dir"},
+                           {"--export-movie"},
                            {"--no-panels", "", false},
                            {"--no-vsync", "", false},
                            {"--fov"},

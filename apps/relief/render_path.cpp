@@ -141,6 +141,13 @@ json loader_json(const stream::LoaderStats& s) {
           {"prefetch_used", s.prefetch_used}};
 }
 
+// Whether tiles come over a network (a URL store, or a simulated link).
+bool fetched_over_a_link(const Args& args) {
+  const std::string& store = args.positional().empty() ? std::string() : args.positional()[0];
+  return store.starts_with("http://") || store.starts_with("https://") ||
+         args.get("--simulate-latency") || args.get("--simulate-bandwidth");
+}
+
 }  // namespace
 
 bool is_movie_output(const std::string& output) {
@@ -189,7 +196,15 @@ int render_path(const Args& args, RenderSetup& setup, const Clock& clock) {
   }
 
   view::SceneOptions so = scene_options(setup);
-  so.interactive = options->interactive;
+  // A movie of a remote store (or a simulated link): complete frames from an
+  // interactive scene that waits for each frame's tiles while the path ahead
+  // is prefetched on the loaders' threads (PathOptions::wait_complete), so
+  // fetches overlap rendering. Not for a local store: read from the page
+  // cache, its tiles are cheaper to read when a frame needs them than to
+  // prepare on load (~25 % more CPU time measured, on 2 cores). Also not
+  // with --no-prefetch.
+  const bool wait_complete = options->movie && options->prefetch && fetched_over_a_link(args);
+  so.interactive = options->interactive || wait_complete;
   so.loader = options->loader;
   so.imagery_budget = options->imagery_budget;
   so.prefetch = options->prefetch;
@@ -276,8 +291,12 @@ int render_path(const Args& args, RenderSetup& setup, const Clock& clock) {
     frames.push_back(std::move(f));
     progress->advance();
     if (!options->frames) return {};
+    if (movie) {  // encoded while the next frame renders; rows flipped by the encoder
+      std::vector<uint8_t> pixels = movie->take_buffer();
+      RELIEF_CHECK((*target)->read_rgba_bottom_up(pixels));
+      return movie->write(std::move(pixels), video::RowOrder::bottom_first);
+    }
     std::vector<uint8_t> pixels = RELIEF_TRY((*target)->read_rgba());
-    if (movie) return movie->write(std::move(pixels));  // encoded while the next frame renders
     const std::string file =
         (std::filesystem::path(out) / fmt::format("frame_{:05d}.png", r.index)).string();
     return write_png(file, pixels, setup.width, setup.height);
@@ -285,6 +304,7 @@ int render_path(const Args& args, RenderSetup& setup, const Clock& clock) {
   view::PathOptions po;
   po.fps = fps;
   po.until_complete = options->until_complete;
+  po.wait_complete = wait_complete;
   auto played = view::play_path(**scene, keys, path_frames, po, **target, clock, callbacks);
   progress->end();
   if (!played) return report_error(played.error().message);

@@ -93,6 +93,34 @@ TEST_F(MovieTest, MovieHasThePathsFramesAndMatchesItsPngs) {
   }
 }
 
+// Over a link (here a simulated one), the export prefetches the path ahead
+// on the loaders' threads and waits for each frame's tiles: the movie is the
+// one made with every frame reading its tiles (--no-prefetch), frame for frame.
+TEST_F(MovieTest, OverALinkThePathIsPrefetchedAndTheFramesAreTheSame) {
+  const fs::path fetched = scratch("fetched.mp4"), read = scratch("read.mp4");
+  const fs::path stats = scratch("fetched.json");
+  const std::vector<std::string> link = {"--simulate-latency", "2"};
+  std::vector<std::string> extra = link;
+  extra.insert(extra.end(), {"--stats", stats.string()});
+  RunResult r = render(fetched, extra);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  extra = link;
+  extra.push_back("--no-prefetch");
+  r = render(read, extra);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::ifstream in(stats);
+  const nlohmann::json s = nlohmann::json::parse(in)["summary"];
+  EXPECT_EQ(s["mode"], "complete");
+  EXPECT_TRUE(s["complete"]);
+  EXPECT_GT(s["prefetched"].get<uint64_t>(), 0u) << "the path ahead was prefetched";
+  EXPECT_GT(s["prefetch_used"].get<uint64_t>(), 0u);
+  const std::vector<Image> a = decode_movie(fetched, kWidth, kHeight);
+  const std::vector<Image> b = decode_movie(read, kWidth, kHeight);
+  ASSERT_EQ(a.size(), 6u);
+  ASSERT_EQ(b.size(), a.size());
+  for (size_t i = 0; i < a.size(); ++i) EXPECT_TRUE(a[i].rgba == b[i].rgba) << "frame " << i;
+}
+
 TEST_F(MovieTest, BadInputIsAOneLineErrorAndNoMovie) {
   const fs::path movie = scratch("bad.mp4");
   expect_refused(render(movie, {"--mode", "interactive"}), "--mode interactive", movie);

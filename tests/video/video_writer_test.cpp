@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 
@@ -69,6 +70,35 @@ TEST(VideoWriter, FramesSizeDurationAndPixelsReadBack) {
   const std::vector<Image> decoded = decode_movie(movie, kWidth, kHeight);
   ASSERT_EQ(decoded.size(), size_t{kFrames});
   for (int i = 0; i < kFrames; ++i) EXPECT_GE(psnr(decoded[i], written[i]), 40) << "frame " << i;
+}
+
+// The movie export reads frames back bottom row first (as GL stores them)
+// into recycled buffers and lets the encoder flip them: the movie must be
+// exactly the one written from top-first frames.
+TEST(VideoWriter, BottomUpRowsInRecycledBuffersGiveTheSameFrames) {
+  ScratchDir dir("video_writer_rows");
+  constexpr int kWidth = 64, kHeight = 48, kFrames = 10;
+  auto top = video::VideoWriter::open(dir / "top.mp4", kWidth, kHeight, 24, {});
+  auto bottom = video::VideoWriter::open(dir / "bottom.mp4", kWidth, kHeight, 24, {});
+  ASSERT_TRUE(top && bottom);
+  const size_t row = size_t{kWidth} * 4;
+  for (int i = 0; i < kFrames; ++i) {
+    const Image frame = synthetic_frame(kWidth, kHeight, i);
+    ASSERT_TRUE((*top)->write(frame.rgba));
+    std::vector<uint8_t> flipped = (*bottom)->take_buffer();
+    ASSERT_EQ(flipped.size(), frame.rgba.size());
+    for (int y = 0; y < kHeight; ++y) {
+      std::copy_n(&frame.rgba[(kHeight - 1 - y) * row], row, &flipped[y * row]);
+    }
+    ASSERT_TRUE((*bottom)->write(std::move(flipped), video::RowOrder::bottom_first));
+  }
+  ASSERT_TRUE((*top)->finish());
+  ASSERT_TRUE((*bottom)->finish());
+  const std::vector<Image> a = decode_movie(dir / "top.mp4", kWidth, kHeight);
+  const std::vector<Image> b = decode_movie(dir / "bottom.mp4", kWidth, kHeight);
+  ASSERT_EQ(a.size(), size_t{kFrames});
+  ASSERT_EQ(b.size(), size_t{kFrames});
+  for (int i = 0; i < kFrames; ++i) EXPECT_TRUE(a[i].rgba == b[i].rgba) << "frame " << i;
 }
 
 TEST(VideoWriter, FractionalFrameRateKeepsTheDuration) {

@@ -5,7 +5,9 @@
 // was complete.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <thread>
 
 #include "../ingest/built_stores.h"
@@ -252,6 +254,141 @@ TEST_F(SceneTest, APathPlaysOneFramePerPeriodOfTheClockAndReportsItsCut) {
   EXPECT_GT(*summary->cuts[0].complete_after_s, 0.0);
   EXPECT_GT(summary->drawn_bytes, 0u);
   EXPECT_GE(summary->drawn_bytes, summary->final_view_bytes / 2);
+}
+
+// The LOD panel's freeze: frames draw the last selection from a camera that
+// moved (its culling and detail seen from outside) until thawed.
+TEST_F(SceneTest, AFrozenSelectionIsDrawnFromTheNewCamera) {
+  auto s = scene(false);
+  ASSERT_TRUE(s);
+  lod::Camera closer = kOblique;
+  closer.lon += 0.1;
+  closer.height *= 0.5;
+  auto moved = s->draw(closer, *target_);
+  ASSERT_TRUE(moved) << moved.error().message;
+  auto still = s->draw(kOblique, *target_);
+  ASSERT_TRUE(still) << still.error().message;
+  const std::vector<uint8_t> image = *target_->read_rgba();
+  ASSERT_NE(moved->selection.quads, still->selection.quads);  // else the test proves nothing
+
+  s->set_selection_frozen(true);
+  auto frozen = s->draw(closer, *target_);
+  ASSERT_TRUE(frozen) << frozen.error().message;
+  EXPECT_EQ(frozen->selection.quads, still->selection.quads);
+  EXPECT_EQ(frozen->draw.triangles, still->draw.triangles);
+  EXPECT_FALSE(frozen->complete);
+  EXPECT_EQ(s->last_selection().quads.size(), still->selection.quads);
+  auto back = s->draw(kOblique, *target_);  // the frozen selection from its own camera
+  ASSERT_TRUE(back);
+  EXPECT_EQ(*target_->read_rgba(), image);
+
+  s->set_selection_frozen(false);
+  auto thawed = s->draw(closer, *target_);
+  ASSERT_TRUE(thawed);
+  EXPECT_EQ(thawed->selection.quads, moved->selection.quads);
+  EXPECT_TRUE(thawed->complete);
+}
+
+// The LOD panel's wireframe: the same triangles as lines, the sky between them.
+TEST_F(SceneTest, WireframeDrawsTheTrianglesEdges) {
+  auto s = scene(false);
+  ASSERT_TRUE(s);
+  const render::RenderOptions filled = s->options().render;
+  auto sky_pixels = [&](const render::RenderOptions& o) {
+    s->set_render_options(o);
+    auto f = s->draw(kOblique, *target_);
+    EXPECT_TRUE(f) << f.error().message;
+    const std::vector<uint8_t> rgba = *target_->read_rgba();
+    const auto to_byte = [](float c) { return static_cast<uint8_t>(std::lround(c * 255)); };
+    size_t n = 0;
+    for (size_t i = 0; i < rgba.size(); i += 4) {
+      n += rgba[i] == to_byte(o.sky[0]) && rgba[i + 1] == to_byte(o.sky[1]) &&
+           rgba[i + 2] == to_byte(o.sky[2]);
+    }
+    return n;
+  };
+  render::RenderOptions wire = filled;
+  wire.wireframe = true;
+  const size_t solid = sky_pixels(filled), lines = sky_pixels(wire);
+  const size_t pixels =
+      static_cast<size_t>(kOblique.width) * static_cast<size_t>(kOblique.height_px);
+  EXPECT_LT(solid, pixels / 2);  // the oblique view is mostly ground
+  EXPECT_GT(lines, solid + pixels / 10);
+  EXPECT_LT(lines, pixels);              // edges were drawn
+  EXPECT_EQ(sky_pixels(filled), solid);  // and it is switched off again
+}
+
+// Movie export over an interactive scene: each frame waits for its tiles
+// (loaded, decoded and measured on the loaders' threads, the coming frames'
+// prefetched) and is then exactly the complete scene's frame.
+TEST_F(SceneTest, WaitingForCompleteFramesDrawsTheCompleteScenesFrames) {
+  lod::Camera far = kOblique;
+  far.lon += 0.2;
+  far.height *= 0.6;
+  const std::vector<lod::Keyframe> keys = {{0.0, kOblique, false}, {1.0, far, false}};
+  constexpr size_t kFrames = 5;
+  auto frames_of = [&](Scene& s, const PathOptions& o) {
+    std::vector<std::vector<uint8_t>> images;
+    PathCallbacks callbacks;
+    callbacks.frame_done = [&](const FrameRecord& r) -> Status {
+      EXPECT_TRUE(r.report.complete) << "frame " << r.index;
+      images.push_back(RELIEF_TRY(target_->read_rgba()));
+      return {};
+    };
+    auto summary = play_path(s, keys, kFrames, o, *target_, clock_, callbacks);
+    EXPECT_TRUE(summary) << summary.error().message;
+    return images;
+  };
+  PathOptions o;
+  o.fps = 4;
+  auto complete = scene(false);
+  ASSERT_TRUE(complete);
+  const auto expected = frames_of(*complete, o);
+  ASSERT_EQ(expected.size(), kFrames);
+
+  auto live = scene(true);
+  ASSERT_TRUE(live);
+  o.wait_complete = true;
+  const auto frames = frames_of(*live, o);
+  ASSERT_EQ(frames.size(), kFrames);
+  for (size_t i = 0; i < kFrames; ++i) EXPECT_TRUE(frames[i] == expected[i]) << "frame " << i;
+  const stream::LoaderStats ls = live->elevation_loader()->stats();
+  EXPECT_GT(ls.prefetched, 0u) << "the coming frames' tiles were prefetched";
+  EXPECT_EQ(ls.failed, 0u);
+}
+
+// The movie export's read-back: GL's bottom-up rows into a reused buffer,
+// the image of read_rgba() flipped; a target without its own (the window's
+// wrapper) gets the same from the default.
+TEST_F(SceneTest, BottomUpReadBackIsTheImageFlipped) {
+  auto s = scene(false);
+  ASSERT_TRUE(s);
+  ASSERT_TRUE(s->draw(kOblique, *target_));
+  const std::vector<uint8_t> top_down = *target_->read_rgba();
+  std::vector<uint8_t> flipped(top_down.size());
+  const size_t row = static_cast<size_t>(kOblique.width) * 4;
+  for (int y = 0; y < kOblique.height_px; ++y) {
+    std::copy_n(&top_down[static_cast<size_t>(kOblique.height_px - 1 - y) * row], row,
+                &flipped[static_cast<size_t>(y) * row]);
+  }
+  ASSERT_NE(flipped, top_down);  // sky above, ground below
+  std::vector<uint8_t> buffer(top_down.size(), 7);
+  const uint8_t* storage = buffer.data();
+  ASSERT_TRUE(target_->read_rgba_bottom_up(buffer));
+  EXPECT_EQ(buffer, flipped);
+  EXPECT_EQ(buffer.data(), storage) << "the buffer is reused";
+
+  struct Wrapper final : render::RenderTarget {
+    render::RenderTarget& inner;
+    explicit Wrapper(render::RenderTarget& t) : inner(t) {}
+    int width() const override { return inner.width(); }
+    int height() const override { return inner.height(); }
+    void bind() override { inner.bind(); }
+    Result<std::vector<uint8_t>> read_rgba() override { return inner.read_rgba(); }
+  } wrapper(*target_);
+  std::vector<uint8_t> by_default;
+  ASSERT_TRUE(wrapper.read_rgba_bottom_up(by_default));
+  EXPECT_EQ(by_default, flipped);
 }
 
 TEST(Percentile, NearestRank) {

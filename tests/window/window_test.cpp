@@ -17,6 +17,7 @@
 #include "../ingest/built_stores.h"
 #include "../support/images.h"
 #include "../support/test_support.h"
+#include "../video/movie_probe.h"
 #include "relief/base/manual_clock.h"
 #include "relief/window/viewer.h"
 #include "relief/window/window.h"
@@ -223,6 +224,105 @@ TEST_F(WindowTest, TheViewerKeysScreenshotRecordSwitchVsyncAndFullscreenAndQuit)
   EXPECT_FALSE(*v->frame());
 }
 
+// F10 ("export recorded path") hands the path recorded so far to the export
+// function on a thread of its own; nothing recorded, nothing exported; an
+// export's failure comes back from wait_for_export().
+TEST_F(WindowTest, F10ExportsTheRecordedPathOnAThreadOfItsOwn) {
+  ManualClock clock;
+  ViewerOptions o;
+  o.start = kCamera;
+  o.record_fps = 12;
+  std::vector<view::PathFile> exported;
+  bool fail_export = false;
+  o.export_path = [&](const view::PathFile& path) -> Status {
+    exported.push_back(path);
+    if (fail_export) return fail("the disk is full");
+    return {};
+  };
+  auto v = viewer(o, clock);
+  ASSERT_TRUE(v);
+  view::InputEvent e;
+  e.type = Type::key_down;
+  e.key = view::Key::f10;
+  ASSERT_TRUE(v->frame());
+  window_->deliver(e);  // nothing recorded yet
+  EXPECT_TRUE(v->wait_for_export());
+  EXPECT_TRUE(exported.empty());
+
+  e.key = view::Key::f9;  // recording on
+  window_->deliver(e);
+  for (int i = 0; i < 3; ++i) {
+    clock.advance(100ms);
+    ASSERT_TRUE(v->frame());
+  }
+  e.key = view::Key::f10;
+  window_->deliver(e);
+  ASSERT_TRUE(v->wait_for_export());
+  ASSERT_EQ(exported.size(), 1u);
+  EXPECT_EQ(exported[0].fps, 12);
+  ASSERT_EQ(exported[0].keyframes.size(), 3u);
+  EXPECT_DOUBLE_EQ(exported[0].keyframes[2].time, 0.3);
+
+  fail_export = true;
+  EXPECT_TRUE(v->export_recorded());
+  const Status st = v->wait_for_export();
+  ASSERT_FALSE(st);
+  EXPECT_EQ(st.error().message, "the disk is full");
+  EXPECT_EQ(exported.size(), 2u);
+}
+
+// Idle: once the camera is still and its frame complete, frame() waits for
+// events instead of drawing; an event draws one frame, then it idles again.
+// Never while recording.
+TEST_F(WindowTest, AStillCompleteViewIsNotRedrawnUntilAnEventComes) {
+  ManualClock clock;
+  ViewerOptions o;
+  o.start = kCamera;
+  o.idle_wait_seconds = 0.001;
+  auto v = viewer(o, clock);
+  ASSERT_TRUE(v);
+  // Until complete: frames draw while tiles arrive.
+  for (int i = 0; i < 6000 && v->summary().skipped_frames == 0; ++i) {
+    ASSERT_TRUE(v->frame());
+    clock.advance(10ms);
+    std::this_thread::sleep_for(1ms);
+  }
+  ViewerSummary s = v->summary();
+  ASSERT_GT(s.skipped_frames, 0u);
+  EXPECT_TRUE(s.complete);
+  const size_t drawn = s.frames;
+  for (int i = 0; i < 20; ++i) {
+    ASSERT_TRUE(v->frame());
+    clock.advance(10ms);
+  }
+  s = v->summary();
+  EXPECT_EQ(s.frames, drawn) << "nothing changed: nothing drawn";
+  EXPECT_EQ(s.skipped_frames, 21u);
+  EXPECT_DOUBLE_EQ(s.seconds, v->summary().seconds);
+
+  // The cursor moves: two frames (the panels show some input a frame
+  // late), then idle again.
+  view::InputEvent e;
+  e.type = Type::cursor;
+  e.x = 10, e.y = 10;
+  window_->deliver(e);
+  for (int i = 0; i < 3; ++i) ASSERT_TRUE(v->frame());
+  s = v->summary();
+  EXPECT_EQ(s.frames, drawn + 2);
+  EXPECT_EQ(s.skipped_frames, 22u);
+
+  e.type = Type::key_down;  // recording: every frame is drawn (and recorded)
+  e.key = view::Key::f9;
+  window_->deliver(e);
+  for (int i = 0; i < 5; ++i) {
+    clock.advance(10ms);
+    ASSERT_TRUE(v->frame());
+  }
+  s = v->summary();
+  EXPECT_EQ(s.frames, drawn + 7);
+  EXPECT_EQ(s.recorded.size(), 5u);
+}
+
 size_t differing_pixels(const std::vector<uint8_t>& a, const std::vector<uint8_t>& b) {
   size_t n = 0;
   for (size_t i = 0; i + 3 < std::min(a.size(), b.size()); i += 4) {
@@ -355,6 +455,35 @@ TEST(ViewCommand, ARecordedSessionPlaysBackThroughTheSameCameras) {
   }
 }
 
+// A scripted session with --record and --export-movie renders what it
+// recorded as a movie, through relief render --path's code: one complete
+// frame per 1/fps of the recorded path, at the window's size.
+TEST(ViewCommand, AScriptedSessionExportsItsRecordedPathAsAMovie) {
+  ScratchDir dir("view_export");
+  const auto path = dir / "path.json", recorded = dir / "recorded.json", movie = dir / "flight.mp4";
+  // At 5 fps (the recording's rate, hence the movie's), to keep the movie short.
+  std::ofstream(path) << R"({"fps": 5, "keyframes": [
+    {"time": 0, "camera": [1.40, 42.40, 6000, 20, -35, 0]},
+    {"time": 0.6, "camera": [1.45, 42.45, 5000, 30, -30, 0]}]})";
+  auto r = run_relief({"view", store_path(), "--play", path.string(), "--exit-when-done",
+                       "--until-complete", "0", "--record", recorded.string(), "--export-movie",
+                       movie.string(), "--size", "160x120", "--no-vsync"},
+                      kNoMesaLeakReport);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("wrote the recorded path to " + recorded.string()), std::string::npos)
+      << r.err;
+  const json rec = read_json(recorded);
+  const json& keys = rec["keyframes"];
+  ASSERT_GE(keys.size(), 2u);
+  const double seconds = keys.back()["time"].get<double>() - keys[0]["time"].get<double>();
+  const long frames = static_cast<long>(std::floor(seconds * rec["fps"].get<double>() + 1e-9)) + 1;
+  const testing::MovieInfo info = testing::probe_movie(movie);
+  EXPECT_EQ(info.frames, frames);
+  EXPECT_EQ(info.width, 160);
+  EXPECT_EQ(info.height, 120);
+  EXPECT_EQ(info.frame_rate, "5/1");
+}
+
 TEST(ViewCommand, BadInputIsAOneLineError) {
   ScratchDir dir("view_bad");
   const std::string store = store_path();
@@ -373,6 +502,11 @@ TEST(ViewCommand, BadInputIsAOneLineError) {
   expect_error(run_relief({"view", store, "--mode", "glider"}), "--mode");
   expect_error(run_relief({"view", store, "--play", not_json.string(), "--mode", "walk"}),
                "--play");
+  expect_error(run_relief({"view", store, "--export-movie", (dir / "flight.png").string()}),
+               "--export-movie");
+  expect_error(
+      run_relief({"view", store, "--export-movie", (dir / "missing" / "flight.mp4").string()}),
+      "--export-movie");
   EXPECT_FALSE(std::filesystem::exists(dir / "missing"));
 }
 

@@ -33,12 +33,17 @@ class OffscreenTarget final : public RenderTarget {
     glBindFramebuffer(GL_FRAMEBUFFER, fbo_);
     glViewport(0, 0, width_, height_);
   }
-  Result<std::vector<uint8_t>> read_rgba() override {
-    std::vector<uint8_t> bottom_up(static_cast<size_t>(width_) * height_ * 4);
+  Status read_rgba_bottom_up(std::vector<uint8_t>& out) override {
+    out.resize(static_cast<size_t>(width_) * height_ * 4);
     glBindFramebuffer(GL_READ_FRAMEBUFFER, fbo_);
     glPixelStorei(GL_PACK_ALIGNMENT, 1);
-    glReadPixels(0, 0, width_, height_, GL_RGBA, GL_UNSIGNED_BYTE, bottom_up.data());
+    glReadPixels(0, 0, width_, height_, GL_RGBA, GL_UNSIGNED_BYTE, out.data());
     if (auto e = gl_error(); !e.empty()) return fail("reading the frame: " + e);
+    return {};
+  }
+  Result<std::vector<uint8_t>> read_rgba() override {
+    std::vector<uint8_t> bottom_up;
+    RELIEF_CHECK(read_rgba_bottom_up(bottom_up));
     std::vector<uint8_t> out(bottom_up.size());
     const size_t row = static_cast<size_t>(width_) * 4;
     for (int y = 0; y < height_; ++y) {
@@ -68,6 +73,17 @@ class OffscreenTarget final : public RenderTarget {
 };
 
 }  // namespace
+
+Status RenderTarget::read_rgba_bottom_up(std::vector<uint8_t>& out) {
+  const std::vector<uint8_t> top_down = RELIEF_TRY(read_rgba());
+  out.resize(top_down.size());
+  const size_t row = static_cast<size_t>(width()) * 4;
+  for (int y = 0; y < height(); ++y) {
+    std::copy_n(&top_down[static_cast<size_t>(height() - 1 - y) * row], row,
+                &out[static_cast<size_t>(y) * row]);
+  }
+  return {};
+}
 
 Result<std::unique_ptr<RenderTarget>> make_offscreen_target(int width, int height) {
   auto t = std::make_unique<OffscreenTarget>(width, height);

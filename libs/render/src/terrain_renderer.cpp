@@ -206,7 +206,9 @@ class GlTerrainRenderer final : public TerrainRenderer {
     glClearDepth(0);
     glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
     bind(program_, view, o);
+    glPolygonMode(GL_FRONT_AND_BACK, o.wireframe ? GL_LINE : GL_FILL);
     stats.draw_calls = multi_draw(selection);
+    glPolygonMode(GL_FRONT_AND_BACK, GL_FILL);
     glFinish();
     stats.gpu_seconds = std::chrono::duration<double>(Clock::now() - gpu_start).count();
     if (auto e = gl_error(); !e.empty()) return fail("drawing: " + e);

@@ -124,11 +124,16 @@ class FfmpegEncoder final : public Encoder {
     return {};
   }
 
-  Status encode(std::span<const uint8_t> rgba) override {
+  Status encode(std::span<const uint8_t> rgba, RowOrder rows) override {
     assert(rgba.size() == static_cast<size_t>(width) * static_cast<size_t>(height) * 4);
     if (int rc = av_frame_make_writable(frame); rc < 0) return error("frame buffer", rc);
-    const uint8_t* const planes[1] = {rgba.data()};
-    const int strides[1] = {width * 4};
+    // Bottom-up rows are read from the last row with a negative stride:
+    // swscale flips them while converting, no copy.
+    const size_t row = static_cast<size_t>(width) * 4;
+    const bool flip = rows == RowOrder::bottom_first;
+    const uint8_t* const planes[1] = {flip ? rgba.data() + row * static_cast<size_t>(height - 1)
+                                           : rgba.data()};
+    const int strides[1] = {flip ? -width * 4 : width * 4};
     sws_scale(sws, planes, strides, 0, height, frame->data, frame->linesize);
     frame->pts = next_pts++;
     return send(frame);

@@ -19,7 +19,7 @@ namespace relief::video {
 class Encoder {
  public:
   virtual ~Encoder() = default;  // closes the file, complete or not
-  virtual Status encode(std::span<const uint8_t> rgba) = 0;
+  virtual Status encode(std::span<const uint8_t> rgba, RowOrder rows) = 0;
   // Drains the encoder, writes the MP4 index and closes the file.
   virtual Status finish() = 0;
 };

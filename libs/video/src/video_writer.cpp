@@ -1,13 +1,17 @@
 #include "relief/video/video_writer.h"
 
 #include <dlfcn.h>
+#include <sys/resource.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cassert>
+#include <cerrno>
 #include <chrono>
 #include <condition_variable>
 #include <cstdlib>
 #include <deque>
+#include <future>
 #include <mutex>
 #include <optional>
 #include <thread>
@@ -64,6 +68,20 @@ Result<OpenEncoder> load_encoder() {
   return fail("video: the FFmpeg encoder module is not installed (looked for " + tried + ")");
 }
 
+// The encoder's thread (and the codec's own threads, which inherit it) runs
+// this much nicer than the render thread: on a machine with few cores,
+// encoding takes the CPU time rendering leaves idle (the single-threaded
+// parts of a frame) instead of competing with the rasteriser's threads.
+// Linux's nice value is per thread. Best effort: a failure changes nothing.
+constexpr int kEncoderNicer = 10;
+
+void lower_this_threads_priority() {
+  const auto tid = static_cast<id_t>(gettid());
+  errno = 0;
+  const int nice = getpriority(PRIO_PROCESS, tid);
+  if (errno == 0) (void)setpriority(PRIO_PROCESS, tid, std::min(nice + kEncoderNicer, 19));
+}
+
 }  // namespace
 
 std::string codec_names() {
@@ -95,15 +113,20 @@ struct VideoWriter::Impl {
 
   std::mutex mutex;
   std::condition_variable space, work;
-  std::deque<std::vector<uint8_t>> queue;  // guarded by mutex
-  bool closing = false;                    // guarded by mutex
-  std::optional<Error> error;              // guarded by mutex
-  VideoStats stats;                        // frames and encode_seconds: encoder thread
+  struct Frame {
+    std::vector<uint8_t> rgba;
+    RowOrder rows;
+  };
+  std::deque<Frame> queue;                  // guarded by mutex
+  std::vector<std::vector<uint8_t>> spare;  // encoded frames' buffers; guarded by mutex
+  bool closing = false;                     // guarded by mutex
+  std::optional<Error> error;               // guarded by mutex
+  VideoStats stats;                         // frames and encode_seconds: encoder thread
   std::thread thread;
 
   void run() {
     for (;;) {
-      std::vector<uint8_t> frame;
+      Frame frame;
       {
         std::unique_lock lock(mutex);
         work.wait(lock, [&] { return !queue.empty() || closing; });
@@ -113,9 +136,13 @@ struct VideoWriter::Impl {
       }
       space.notify_one();
       const auto start = std::chrono::steady_clock::now();
-      Status st = encoder->encode(frame);
+      Status st = encoder->encode(frame.rgba, frame.rows);
       stats.encode_seconds += seconds_since(start);
       ++stats.frames;
+      {
+        std::lock_guard lock(mutex);
+        if (spare.size() < capacity) spare.push_back(std::move(frame.rgba));
+      }
       if (!st) {
         std::lock_guard lock(mutex);
         error = st.error();
@@ -175,18 +202,44 @@ Result<std::unique_ptr<VideoWriter>> VideoWriter::open(const fs::path& path, int
   impl->temporary = temporary_name(path);
   impl->frame_bytes = static_cast<size_t>(width) * static_cast<size_t>(height) * 4;
   impl->capacity = static_cast<size_t>(options.queue_frames);
-  auto encoder = open_encoder(impl->temporary.string(), path.string(), width, height, fps, options);
-  if (!encoder) {
+  // Opened on the encoder's thread, after it lowered its priority: the
+  // codec's threads are created here and inherit it.
+  std::promise<Status> opened;
+  std::future<Status> result = opened.get_future();
+  impl->thread = std::thread([&, m = impl.get()] {
+    lower_this_threads_priority();
+    auto encoder = open_encoder(m->temporary.string(), path.string(), width, height, fps, options);
+    if (!encoder) {
+      opened.set_value(std::unexpected(encoder.error()));
+      return;
+    }
+    m->encoder = std::move(*encoder);
+    opened.set_value({});  // from here on, nothing of open()'s frame is used
+    m->run();
+  });
+  if (Status st = result.get(); !st) {
+    impl->thread.join();
     std::error_code ec;
     fs::remove(impl->temporary, ec);
-    return std::unexpected(encoder.error());
+    return std::unexpected(st.error());
   }
-  impl->encoder = std::move(*encoder);
-  impl->thread = std::thread([m = impl.get()] { m->run(); });
   return std::unique_ptr<VideoWriter>(new VideoWriter(std::move(impl)));
 }
 
-Status VideoWriter::write(std::vector<uint8_t> rgba) {
+std::vector<uint8_t> VideoWriter::take_buffer() {
+  Impl& m = *impl_;
+  {
+    std::lock_guard lock(m.mutex);
+    if (!m.spare.empty()) {
+      std::vector<uint8_t> buffer = std::move(m.spare.back());
+      m.spare.pop_back();
+      return buffer;
+    }
+  }
+  return std::vector<uint8_t>(m.frame_bytes);
+}
+
+Status VideoWriter::write(std::vector<uint8_t> rgba, RowOrder rows) {
   Impl& m = *impl_;
   assert(!m.finished);
   assert(rgba.size() == m.frame_bytes);
@@ -195,7 +248,7 @@ Status VideoWriter::write(std::vector<uint8_t> rgba) {
     std::unique_lock lock(m.mutex);
     m.space.wait(lock, [&] { return m.queue.size() < m.capacity || m.error; });
     if (m.error) return std::unexpected(*m.error);
-    m.queue.push_back(std::move(rgba));
+    m.queue.push_back({std::move(rgba), rows});
   }
   m.stats.write_wait_seconds += seconds_since(start);
   m.work.notify_one();

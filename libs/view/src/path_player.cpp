@@ -3,7 +3,11 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <optional>
+#include <thread>
 #include <unordered_set>
+
+#include <fmt/format.h>
 
 namespace relief::view {
 
@@ -32,6 +36,56 @@ uint64_t file_bytes(const tiles::Store& store, const TileSet& tiles) {
     if (const auto* e = store.index(k.level).find(k)) bytes += e->file_bytes;
   }
   return bytes;
+}
+
+// Waits (polling: the loaders' threads have no completion signal) until
+// the scene's loaders have nothing queued or loading.
+void wait_idle(Scene& scene) {
+  for (stream::TileLoader* loader : {scene.elevation_loader(), scene.imagery_loader()}) {
+    while (loader && !loader->idle()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+}
+
+// Requests `camera`'s tiles until none is missing, without drawing (level
+// by level: a coarse-first loader asks for a tile once its parent is in).
+Status wait_resident(Scene& scene, const lod::Camera& camera, size_t index) {
+  constexpr int kMaxRounds = 1000;
+  std::optional<uint64_t> settled;  // tiles loaded or failed at the last round
+  for (int round = 0;; ++round) {
+    const uint32_t waiting = RELIEF_TRY(scene.request(camera));
+    if (waiting == 0) return {};
+    // request() asked for everything missing: if the loader has nothing to
+    // do and loaded nothing since the last round, the quads wait for tiles
+    // that failed (and wait out their retry pause).
+    const stream::LoaderStats s = scene.elevation_loader()->stats();
+    const uint64_t done = s.loaded + s.failed;
+    if ((s.queued == 0 && s.in_flight == 0 && settled == done) || round == kMaxRounds) {
+      return fail(fmt::format("frame {}: {} quads wait for elevation tiles that failed to load",
+                              index, waiting));
+    }
+    settled = done;
+    wait_idle(scene);
+  }
+}
+
+// PathOptions::wait_complete. A frame whose tiles the path's prefetch
+// brought in is drawn once (its selection also prefetches further on); a
+// fresh view (the first frame, after a cut) or a frame that found tiles
+// missing waits for them without drawing, then draws again.
+Result<FrameReport> draw_complete(Scene& scene, const lod::Camera& camera, size_t index, bool fresh,
+                                  render::RenderTarget& target) {
+  constexpr int kMaxDraws = 100;
+  if (fresh) RELIEF_CHECK(wait_resident(scene, camera, index));
+  for (int draws = 1;; ++draws) {
+    FrameReport report = RELIEF_TRY(scene.draw(camera, target));
+    if (report.complete) return report;
+    if (draws == kMaxDraws) {
+      return fail(fmt::format("frame {}: not complete after {} draws (tiles failing to load)",
+                              index, draws));
+    }
+    RELIEF_CHECK(wait_resident(scene, camera, index));
+    wait_idle(scene);  // imagery, requested by the draw
+  }
 }
 
 }  // namespace
@@ -64,7 +118,7 @@ Result<PathSummary> play_path(Scene& scene, const std::vector<lod::Keyframe>& ke
   for (size_t index = 0;; ++index) {
     const bool on_path = index < frame_count;
     if (!on_path) {
-      if (!interactive || summary.complete) break;
+      if (!interactive || options.wait_complete || summary.complete) break;
       const double now = seconds_between(start, clock.now());
       if (settle_start < 0) settle_start = now;
       if (now - settle_start >= options.until_complete) break;
@@ -72,10 +126,12 @@ Result<PathSummary> play_path(Scene& scene, const std::vector<lod::Keyframe>& ke
     const double t =
         keys.front().time + static_cast<double>(std::min(index, frame_count - 1)) / options.fps;
     const lod::Camera camera = lod::camera_at(keys, t);
+    bool fresh = index == 0;  // a view with nothing prefetched for it
     for (auto& [frame_of_cut, time] : cuts) {
       if (!frame_of_cut && t >= time) {
         frame_of_cut = index + 1;
         scene.cut();
+        fresh = true;
       }
     }
     if (callbacks.frame_start) callbacks.frame_start(index);
@@ -83,7 +139,12 @@ Result<PathSummary> play_path(Scene& scene, const std::vector<lod::Keyframe>& ke
     FrameRecord record;
     record.index = index;
     record.time = seconds_between(start, frame_start);
-    record.report = RELIEF_TRY(scene.draw(camera, target));
+    if (options.wait_complete) {
+      scene.set_prefetch_camera(lod::camera_at(keys, t + options.lookahead_s));
+      record.report = RELIEF_TRY(draw_complete(scene, camera, index, fresh, target));
+    } else {
+      record.report = RELIEF_TRY(scene.draw(camera, target));
+    }
     summary.complete = record.report.complete;
     frame_ms.push_back(record.report.frame_seconds * 1e3);
     cpu_ms.push_back(record.report.cpu_seconds * 1e3);
@@ -91,11 +152,13 @@ Result<PathSummary> play_path(Scene& scene, const std::vector<lod::Keyframe>& ke
     complete_frames.push_back(record.report.complete);
     if (store) add_drawn(drawn, scene.terrain(), scene.last_selection(), true);
     if (callbacks.frame_done) RELIEF_CHECK(callbacks.frame_done(record));
-    if (interactive) {  // real time: the next frame is due 1/fps after this one
+    if (interactive &&
+        !options.wait_complete) {  // real time: the next frame is due 1/fps after this one
       clock.sleep_until(frame_start + std::chrono::duration_cast<Clock::Duration>(
                                           std::chrono::duration<double>(1 / options.fps)));
     }
   }
+  if (options.wait_complete) scene.set_prefetch_camera(std::nullopt);
   summary.frames = frame_ms.size();
   summary.p50_frame_ms = percentile(frame_ms, 0.5);
   summary.p99_frame_ms = percentile(frame_ms, 0.99);

@@ -51,7 +51,10 @@ struct Scene::Impl {
   std::optional<lod::Camera> previous;             // of the last frame, unless cut
   lod::Selection last;
   std::optional<lod::RefinedMesh> last_refined;
-  uint64_t imagery_misses = 0;  // a frame that missed imagery is not complete
+  uint64_t imagery_misses = 0;                 // a frame that missed imagery is not complete
+  std::optional<lod::Camera> prefetch_camera;  // set_prefetch_camera()
+  bool frozen = false;                         // set_selection_frozen()
+  bool drawn = false;                          // a frame was drawn: `last` is its selection
 
   Impl(const tiles::Store* s, const tiles::Store* i, const SceneOptions& o, const Clock& c)
       : store(s), imagery(i), options(o), clock(c), mesh(mesh_level(s, o)) {
@@ -73,6 +76,15 @@ struct Scene::Impl {
   }
 
   Status prefetch_along_motion(const lod::Camera& camera) {
+    if (loader && prefetch_camera) {  // the known path's coming frame
+      auto ahead = lod::make_view(*prefetch_camera);
+      if (!ahead) return {};
+      loader->set_prefetch(true);
+      auto predicted = lod::select_quads(*ahead, *terrain, options.selection);
+      loader->set_prefetch(false);
+      if (!predicted) return std::unexpected(predicted.error());
+      return {};
+    }
     if (!loader || !options.prefetch || !previous) return {};
     const bool jumped =
         std::abs(camera.lon - previous->lon) + std::abs(camera.lat - previous->lat) > 1;
@@ -170,6 +182,19 @@ Result<FrameReport> Scene::draw(const lod::Camera& camera, render::RenderTarget&
   FrameReport report;
   report.camera = camera;
   const auto start = m.clock.now();
+  if (m.frozen && m.drawn) {  // the last frame's pins stay: no begin_frame()
+    const lod::RefinedMesh* refined = m.last_refined ? &*m.last_refined : nullptr;
+    if (m.imagery_loader) m.imagery_loader->begin_frame();  // the renderer requests imagery
+    auto frame = m.renderer->draw(view, m.last, target, m.options.render, refined);
+    if (m.imagery_loader) m.imagery_loader->end_frame();
+    report.draw = RELIEF_TRY(std::move(frame));
+    report.frame_seconds = seconds_between(start, m.clock.now());
+    report.cpu_seconds = report.frame_seconds - report.draw.gpu_seconds;
+    report.selection = m.last.stats;
+    if (refined) report.refine = refined->stats;
+    m.previous.reset();  // no motion to prefetch along when thawed
+    return report;
+  }
   m.terrain->begin_frame();
   lod::SelectionOptions so = m.options.selection;
   if (m.feeds_back()) so.also_split = m.split_feedback.for_selection(view, *m.terrain);
@@ -222,7 +247,25 @@ Result<FrameReport> Scene::draw(const lod::Camera& camera, render::RenderTarget&
   m.last = std::move(selection);
   m.last_refined = std::move(refined);
   m.previous = camera;
+  m.drawn = true;
   return report;
+}
+
+void Scene::set_prefetch_camera(std::optional<lod::Camera> camera) {
+  impl_->prefetch_camera = camera;
+}
+
+Result<uint32_t> Scene::request(const lod::Camera& camera) {
+  Impl& m = *impl_;
+  assert(m.loader);  // interactive scenes only
+  const lod::View view = RELIEF_TRY(lod::make_view(camera));
+  m.terrain->begin_frame();
+  lod::SelectionOptions so = m.options.selection;
+  if (m.feeds_back()) so.also_split = m.split_feedback.for_selection(view, *m.terrain);
+  const lod::Selection selection = RELIEF_TRY(lod::select_quads(view, *m.terrain, so));
+  RELIEF_CHECK(m.prefetch_along_motion(camera));
+  m.terrain->end_frame();
+  return selection.stats.waiting;
 }
 
 void Scene::cut() {
@@ -238,6 +281,12 @@ void Scene::set_pixel_error(double pixels) {
 }
 void Scene::set_render_options(const render::RenderOptions& options) {
   impl_->options.render = options;
+}
+void Scene::set_selection_frozen(bool frozen) {
+  impl_->frozen = frozen;
+}
+bool Scene::selection_frozen() const {
+  return impl_->frozen;
 }
 lod::TerrainModel& Scene::terrain() {
   return *impl_->terrain;

@@ -40,6 +40,12 @@ void level_of_detail(Viewer::Impl& v) {
     v.speed_lod = view::SpeedLod(v.options.speed_lod);
   }
   text(fmt::format("threshold now {:.2f} px (x{:.2f})", v.threshold, v.speed_lod.factor()));
+  if (ImGui::Checkbox("wireframe", &v.scene_options.render.wireframe)) {
+    v.scene->set_render_options(v.scene_options.render);
+  }
+  // The last selection keeps being drawn while the camera moves: its
+  // culling and detail seen from outside.
+  if (ImGui::Checkbox("freeze selection", &v.frozen)) v.scene->set_selection_frozen(v.frozen);
 }
 
 void loader_lines(const char* name, stream::TileLoader* loader, const LoadRate& rate) {
@@ -99,6 +105,16 @@ void cursor(Viewer::Impl& v) {
   text(fmt::format("height {:.1f} m, distance {:.0f} m", p.height, p.distance));
 }
 
+void recorded_path(Viewer::Impl& v) {
+  if (!ImGui::CollapsingHeader("Path")) return;
+  bool recording = v.recording;
+  if (ImGui::Checkbox("recording (F9)", &recording)) v.on_window_key(view::Key::f9);
+  const double seconds = v.recorded.size() > 1 ? v.recorded.back().time - v.recorded[0].time : 0;
+  text(fmt::format("{} keyframes, {:.1f} s", v.recorded.size(), seconds));
+  if (ImGui::Button("export recorded path (F10)")) v.export_recorded();
+  if (!v.export_status.empty()) text(v.export_status);
+}
+
 void load_progress(Viewer::Impl& v) {
   const LoadProgress& p = v.progress;
   const std::string label = p.pending == 0
@@ -121,6 +137,7 @@ void draw_panels(Viewer::Impl& v) {
   caches(v);
   frame_statistics(v);
   cursor(v);
+  recorded_path(v);
   ImGui::End();
 }
 

@@ -1,6 +1,7 @@
 #include "relief/window/viewer.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <filesystem>
 
@@ -15,7 +16,13 @@ namespace relief::window {
 
 namespace {
 constexpr size_t kRecentFrames = 120;  // the panels' statistics window
+
+bool same_camera(const lod::Camera& a, const lod::Camera& b) {
+  return a.lon == b.lon && a.lat == b.lat && a.height == b.height && a.heading == b.heading &&
+         a.pitch == b.pitch && a.roll == b.roll && a.fov_y == b.fov_y && a.width == b.width &&
+         a.height_px == b.height_px;
 }
+}  // namespace
 
 Status write_png(const std::string& path, std::span<const uint8_t> rgba, int width, int height) {
   tiles::Raster image(tiles::SampleType::UInt8, 4, width, height);
@@ -30,6 +37,7 @@ Status Viewer::Impl::make_scene() {
   const tiles::Store* layer = imagery_on ? imagery : nullptr;
   if (!layer) so.selection.texture = nullptr;
   scene = RELIEF_TRY(view::Scene::create(elevation, layer, so, clock));
+  scene->set_selection_frozen(frozen);  // a new scene has no selection yet: frozen from its first
   progress = {};
   return {};
 }
@@ -39,8 +47,8 @@ namespace {
 // Keys the viewer keeps: neither their press nor their release reaches the controller.
 bool viewer_key(view::Key key) {
   using view::Key;
-  return key == Key::tab || key == Key::f1 || key == Key::f8 || key == Key::f9 || key == Key::f11 ||
-         key == Key::f12 || key == Key::escape;
+  return key == Key::tab || key == Key::f1 || key == Key::f8 || key == Key::f9 || key == Key::f10 ||
+         key == Key::f11 || key == Key::f12 || key == Key::escape;
 }
 
 }  // namespace
@@ -58,6 +66,9 @@ void Viewer::Impl::on_window_key(view::Key key) {
     case Key::f9:
       recording = !recording;
       record_cut = recording && !recorded.empty();  // a resumed recording jumps
+      break;
+    case Key::f10:
+      export_recorded();
       break;
     case Key::f11:
       window.toggle_fullscreen();
@@ -89,6 +100,31 @@ void Viewer::Impl::record(const lod::Camera& camera) {
   if (!recorded.empty() && !(time > recorded.back().time)) return;
   recorded.push_back({time, camera, record_cut});
   record_cut = false;
+}
+
+bool Viewer::Impl::export_recorded() {
+  poll_export();
+  if (export_job.valid()) return false;  // the running export's line stays
+  if (!options.export_path) {
+    export_status = "nothing to export to";
+    return false;
+  }
+  if (recorded.empty()) {
+    export_status = "nothing recorded (F9 starts recording)";
+    return false;
+  }
+  export_status = fmt::format("exporting {} keyframes...", recorded.size());
+  // A copy: recording goes on while the export runs.
+  export_job = std::async(std::launch::async, options.export_path,
+                          view::PathFile{options.record_fps, recorded});
+  return true;
+}
+
+void Viewer::Impl::poll_export() {
+  using namespace std::chrono_literals;
+  if (!export_job.valid() || export_job.wait_for(0s) != std::future_status::ready) return;
+  const Status st = export_job.get();
+  export_status = st ? "exported" : "export failed: " + st.error().message;
 }
 
 Status Viewer::Impl::write_screenshot(const std::string& path) {
@@ -134,14 +170,30 @@ Result<std::unique_ptr<Viewer>> Viewer::create(Window& window, const tiles::Stor
 Viewer::Viewer(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 
 Viewer::~Viewer() {
-  if (impl_) impl_->window.set_input_handler({});
+  if (!impl_) return;
+  impl_->window.set_input_handler({});
+  if (impl_->export_job.valid()) impl_->export_job.wait();  // it uses the stores
 }
 
 Result<bool> Viewer::frame() {
   Impl& v = *impl_;
-  v.window.poll_events();
+  if (v.idle) {
+    v.window.wait_events(v.options.idle_wait_seconds);
+  } else {
+    v.window.poll_events();
+  }
+  v.poll_export();
   if (v.quit || v.window.should_close()) return false;
   const Clock::TimePoint now = v.clock.now();
+  if (v.idle && v.window.events() == v.drawn_events && v.export_status == v.drawn_export_status) {
+    v.last = now;  // time passes without frames: the next step starts from here
+    v.time = seconds_between(*v.start, now);
+    ++v.skipped;
+    return true;
+  }
+  // A frame after events draws, and so does the next: Dear ImGui shows the
+  // effect of some input (hover, a release) one frame later.
+  const bool quiet = v.window.events() == v.drawn_events;
   if (!v.start) v.start = v.last = now;
   const double dt = seconds_between(*v.last, now);
   v.last = now;
@@ -164,6 +216,12 @@ Result<bool> Viewer::frame() {
   const view::FrameReport report = RELIEF_TRY(v.scene->draw(camera, target));
   v.report = report;
   if (v.recording) v.record(camera);
+  const bool playing =
+      v.controller->mode() == view::ControlMode::playback && !v.controller->finished();
+  v.idle = v.options.idle_wait_seconds > 0 && quiet && !v.recording && !playing && v.drawn_camera &&
+           same_camera(*v.drawn_camera, camera) &&
+           ((report.complete && v.threshold <= still) || v.frozen);
+  v.drawn_camera = camera;
 
   if (v.index > 0) {
     v.frame_ms.push_back(dt * 1e3);
@@ -191,6 +249,8 @@ Result<bool> Viewer::frame() {
     v.window.present({});
   }
   ++v.index;
+  v.drawn_events = v.window.events();  // what the panels took while drawn included
+  v.drawn_export_status = v.export_status;
 
   if (v.options.exit_when_done) {
     const bool path_done =
@@ -216,6 +276,7 @@ ViewerSummary Viewer::summary() const {
   const Impl& v = *impl_;
   ViewerSummary s;
   s.frames = v.index;
+  s.skipped_frames = v.skipped;
   s.seconds = v.time;
   s.p50_frame_ms = view::percentile(v.frame_ms, 0.5);
   s.p99_frame_ms = view::percentile(v.frame_ms, 0.99);
@@ -246,6 +307,18 @@ bool Viewer::panels_visible() const {
 
 bool Viewer::recording() const {
   return impl_->recording;
+}
+
+bool Viewer::export_recorded() {
+  return impl_->export_recorded();
+}
+
+Status Viewer::wait_for_export() {
+  Impl& v = *impl_;
+  if (!v.export_job.valid()) return {};
+  const Status st = v.export_job.get();
+  v.export_status = st ? "exported" : "export failed: " + st.error().message;
+  return st;
 }
 
 Status Viewer::screenshot(const std::string& path) {

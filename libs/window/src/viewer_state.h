@@ -2,6 +2,7 @@
 // The viewer's state, shared by its loop (viewer.cpp) and its panels
 // (panels.cpp).
 #include <deque>
+#include <future>
 #include <memory>
 #include <optional>
 #include <string>
@@ -66,6 +67,7 @@ struct Viewer::Impl {
   std::unique_ptr<view::Controller> controller;
   view::SpeedLod speed_lod;
   double threshold = 1;  // this frame's pixel error
+  bool frozen = false;   // the LOD panel's "freeze selection"
 
   std::optional<Clock::TimePoint> start, last;
   double time = 0;
@@ -74,8 +76,15 @@ struct Viewer::Impl {
 
   bool recording = false, record_cut = false;
   std::vector<lod::Keyframe> recorded;
+  std::future<Status> export_job;  // export_recorded()'s, while running
+  std::string export_status;       // the Path panel's line
 
   size_t index = 0;
+  size_t skipped = 0;                       // frames not drawn: idle
+  bool idle = false;                        // the last frame: still and complete
+  std::optional<lod::Camera> drawn_camera;  // the last frame's
+  uint64_t drawn_events = 0;                // window events when the last frame was drawn
+  std::string drawn_export_status;          // export_status then
   std::optional<view::FrameReport> report;  // the last frame's
   std::vector<double> frame_ms;             // every frame's but the first
   std::deque<double> recent_ms;             // the panels' window
@@ -92,6 +101,8 @@ struct Viewer::Impl {
   void on_input(const view::InputEvent& e);
   void on_window_key(view::Key key);
   void record(const lod::Camera& camera);
+  bool export_recorded();
+  void poll_export();      // a finished export's status into export_status
   void take_screenshot();  // F12: the next free relief_NNNN.png in screenshot_dir
   Status write_screenshot(const std::string& path);
 };

@@ -57,6 +57,7 @@ struct Window::Impl {
   ResizableTarget target;
   InputHandler handler;
   bool vsync = true, imgui = false, fullscreen = false, keep_screen = false;
+  uint64_t events = 0;  // events()
   std::vector<uint8_t> screen;
   int windowed_x = 0, windowed_y = 0, windowed_width = 0, windowed_height = 0;
 
@@ -78,11 +79,24 @@ struct Window::Impl {
 
 namespace {
 
+Window::Impl& impl_of(GLFWwindow* w) {
+  return *static_cast<Window::Impl*>(glfwGetWindowUserPointer(w));
+}
+
 Window& owner(GLFWwindow* w) {
-  return *static_cast<Window::Impl*>(glfwGetWindowUserPointer(w))->owner;
+  return *impl_of(w).owner;
+}
+
+// Events that change what the window shows without reaching the handler.
+void on_refresh(GLFWwindow* w) {
+  ++impl_of(w).events;
+}
+void on_focus(GLFWwindow* w, int) {
+  ++impl_of(w).events;
 }
 
 void on_key(GLFWwindow* w, int key, int scancode, int action, int mods) {
+  ++impl_of(w).events;
   ImGui_ImplGlfw_KeyCallback(w, key, scancode, action, mods);
   const view::Key k = key_from_glfw(key);
   // Typing into a panel's field is not a command; function keys always are.
@@ -96,10 +110,12 @@ void on_key(GLFWwindow* w, int key, int scancode, int action, int mods) {
 }
 
 void on_char(GLFWwindow* w, unsigned int c) {
+  ++impl_of(w).events;
   ImGui_ImplGlfw_CharCallback(w, c);
 }
 
 void on_mouse_button(GLFWwindow* w, int button, int action, int mods) {
+  ++impl_of(w).events;
   ImGui_ImplGlfw_MouseButtonCallback(w, button, action, mods);
   // A press on a panel is the panel's; a release always goes through, so a
   // drag that ends over a panel still ends.
@@ -114,6 +130,7 @@ void on_mouse_button(GLFWwindow* w, int button, int action, int mods) {
 }
 
 void on_cursor(GLFWwindow* w, double x, double y) {
+  ++impl_of(w).events;
   view::InputEvent e;
   e.type = view::InputEvent::Type::cursor;
   e.x = x, e.y = y;
@@ -121,6 +138,7 @@ void on_cursor(GLFWwindow* w, double x, double y) {
 }
 
 void on_scroll(GLFWwindow* w, double x, double y) {
+  ++impl_of(w).events;
   ImGui_ImplGlfw_ScrollCallback(w, x, y);
   if (ImGui::GetIO().WantCaptureMouse) return;
   view::InputEvent e;
@@ -207,6 +225,8 @@ Result<std::unique_ptr<Window>> Window::create(const WindowOptions& options) {
   glfwSetCursorPosCallback(impl->window, on_cursor);
   glfwSetScrollCallback(impl->window, on_scroll);
   glfwSetFramebufferSizeCallback(impl->window, on_framebuffer_size);
+  glfwSetWindowRefreshCallback(impl->window, on_refresh);
+  glfwSetWindowFocusCallback(impl->window, on_focus);
 
   std::unique_ptr<Window> w(new Window(std::move(impl)));
   w->impl_->owner = w.get();
@@ -230,11 +250,20 @@ void Window::deliver(const view::InputEvent& event) {
     // A failed resize keeps the previous size: the frame is scaled to the window.
     (void)impl_->target.resize(static_cast<int>(event.x), static_cast<int>(event.y));
   }
+  ++impl_->events;
   if (impl_->handler) impl_->handler(event);
 }
 
 void Window::poll_events() {
   glfwPollEvents();
+}
+
+void Window::wait_events(double seconds) {
+  glfwWaitEventsTimeout(seconds);
+}
+
+uint64_t Window::events() const {
+  return impl_->events;
 }
 
 bool Window::should_close() const {

@@ -20,6 +20,10 @@ class RenderTarget {
   virtual void bind() = 0;
   // RGBA8 pixels, top row first.
   virtual Result<std::vector<uint8_t>> read_rgba() = 0;
+  // RGBA8 pixels, bottom row first (as GL stores them), into `out`, resized
+  // to width * height * 4 (a buffer of that size is reused as it is): for a
+  // consumer that flips rows itself (the movie encoder) and recycles buffers.
+  virtual Status read_rgba_bottom_up(std::vector<uint8_t>& out);
   // Depth, top row first: reversed-Z, 1 at the near plane, 0 where nothing
   // was drawn (sort-last compositing). Targets without a readable depth
   // buffer fail.

@@ -28,6 +28,7 @@ namespace relief::render {
 struct RenderOptions {
   float exaggeration = 1.0f;
   std::array<float, 3> sky = {0.62f, 0.74f, 0.88f};
+  bool wireframe = false;  // the triangles' edges instead of filled triangles (the LOD panel)
 };
 
 struct FrameStats {

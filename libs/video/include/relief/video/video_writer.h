@@ -30,6 +30,10 @@ std::string codec_names();
 // Fails with a one-line message naming the option if `options` is not usable.
 Status check_options(const VideoOptions& options);
 
+// How a frame's rows are ordered: top first (images, PNGs) or bottom first
+// (as OpenGL reads a framebuffer back; the encoder flips them for free).
+enum class RowOrder { top_first, bottom_first };
+
 struct VideoStats {
   uint64_t frames = 0;
   uint64_t bytes = 0;             // of the finished file
@@ -49,9 +53,13 @@ class VideoWriter {
   VideoWriter(const VideoWriter&) = delete;
   VideoWriter& operator=(const VideoWriter&) = delete;
 
-  // One frame, width * height * 4 bytes, top row first. Fails if the encoder
-  // has failed (the error names the file).
-  Status write(std::vector<uint8_t> rgba);
+  // One frame, width * height * 4 bytes, rows in `rows` order. Fails if the
+  // encoder has failed (the error names the file).
+  Status write(std::vector<uint8_t> rgba, RowOrder rows = RowOrder::top_first);
+  // A frame buffer to fill and pass to write(): one the encoder is done
+  // with when there is one (no allocation, no page faults on the render
+  // thread), else a new one. Its contents are undefined.
+  std::vector<uint8_t> take_buffer();
   // Flushes the encoder, completes the file and renames it onto the path.
   Result<VideoStats> finish();
 

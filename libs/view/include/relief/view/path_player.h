@@ -18,6 +18,14 @@ namespace relief::view {
 struct PathOptions {
   double fps = 30;
   double until_complete = 0;  // seconds, interactive only
+  // An interactive scene made to draw complete frames (movie export), not
+  // paced: before each frame, its tiles are requested and waited for on the
+  // loaders' threads while the camera `lookahead_s` further along the path
+  // is prefetched, so reading, decoding and diamond errors overlap the
+  // frames before. A frame not complete after that (imagery) is drawn again
+  // once the loaders are idle. Fails if tiles cannot be loaded.
+  bool wait_complete = false;
+  double lookahead_s = 0.5;
 };
 
 struct FrameRecord {

@@ -100,6 +100,15 @@ class Scene {
   void cut();
 
   const SceneOptions& options() const;
+  // A known path (movie export): every interactive frame also requests, at
+  // prefetch priority, what the selection of this camera of a coming frame
+  // wants, instead of extrapolating the motion. nullopt: back to that.
+  void set_prefetch_camera(std::optional<lod::Camera> camera);
+  // Interactive scenes: the selection of `camera` and its requests (with the
+  // prefetch camera's), without drawing. Returns the quads still waiting for
+  // elevation data (0: a draw() of `camera` now needs no more).
+  Result<uint32_t> request(const lod::Camera& camera);
+
   // Changes that act from the next frame (the viewer's panels, speed-dependent LOD).
   void set_pixel_error(double pixels);
   void set_render_options(const render::RenderOptions& options);
@@ -108,6 +117,12 @@ class Scene {
   // `tiles` are ignored): the next frame shows no tile processed with the
   // old ones. The viewer's layer panels call this.
   Status set_texture_layers(std::vector<render::TextureLayer> layers);
+  // Frozen: frames draw the last frame's selection (and refined mesh) from
+  // the new camera, without selecting, requesting or prefetching, so culling
+  // and level of detail can be inspected from outside (the LOD panel). Its
+  // tiles stay pinned. Frozen frames are never complete.
+  void set_selection_frozen(bool frozen);
+  bool selection_frozen() const;
   lod::TerrainModel& terrain();
   const lod::Selection& last_selection() const;  // of the last draw()
   const lod::RefinedMesh* last_refined() const;  // of the last draw(), edge-mark frames

@@ -9,7 +9,8 @@
 // Keys the viewer keeps for itself (everything else goes to the controller):
 //   Tab, F1  panels on/off        F8   vsync on/off
 //   F9       recording on/off     F11  fullscreen
-//   F12      screenshot (PNG)     Escape  quit
+//   F10      export recorded path F12  screenshot (PNG)     Escape  quit
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -19,6 +20,7 @@
 #include "relief/base/result.h"
 #include "relief/lod/camera_path.h"
 #include "relief/view/controller.h"
+#include "relief/view/path_file.h"
 #include "relief/view/scene.h"
 #include "relief/view/speed_lod.h"
 #include "relief/window/window.h"
@@ -39,6 +41,17 @@ struct ViewerOptions {
   std::string screenshot_dir = ".";
   bool panels = true;
   bool collect_frames = false;  // keep every frame's record (for --stats)
+  // Idle: once the camera is still and its frame complete (at the still
+  // threshold, or the selection frozen), frame() waits up to this long for
+  // an event instead of drawing, and draws again only when one came (input,
+  // a resize, an exposure) or an export finished. Not while recording (the
+  // path would glide through the pause) or playing a path. 0: always draw.
+  double idle_wait_seconds = 0.25;
+  // "Export recorded path" (F10, the Path panel's button): called on a
+  // thread of its own with the path recorded so far while frames keep
+  // drawing (`relief view` writes it and, with --export-movie, renders it as
+  // a movie). Null: nothing to export to.
+  std::function<Status(const view::PathFile& path)> export_path;
 };
 
 // One frame as the statistics see it.
@@ -57,7 +70,8 @@ struct ViewerFrame {
 };
 
 struct ViewerSummary {
-  size_t frames = 0;
+  size_t frames = 0;          // drawn
+  size_t skipped_frames = 0;  // frame() calls that drew nothing: idle, nothing changed
   double seconds = 0;
   double p50_frame_ms = 0, p99_frame_ms = 0;  // over every frame but the first
   bool complete = false;                      // the last frame
@@ -93,6 +107,12 @@ class Viewer {
   view::Scene& scene();
   bool panels_visible() const;
   bool recording() const;
+  // Starts export_path with the path recorded so far (F10). False, with the
+  // reason in the Path panel, when an export is running, nothing was
+  // recorded or there is no export_path.
+  bool export_recorded();
+  // Waits for the running export, if any, and returns its status.
+  Status wait_for_export();
   // The last frame's pixels (terrain only) as a PNG, atomically.
   Status screenshot(const std::string& path);
 

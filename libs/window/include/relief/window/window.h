@@ -48,6 +48,13 @@ class Window {
   void deliver(const view::InputEvent& event);
   // Processes the window system's pending events (through deliver()).
   void poll_events();
+  // Waits up to `seconds` for an event, then processes what is pending: an
+  // idle viewer's poll_events().
+  void wait_events(double seconds);
+  // Events seen so far: input (also what the panels take), resizes,
+  // exposures, focus changes and deliver()ed events. A still viewer redraws
+  // when it changes.
+  uint64_t events() const;
 
   // The window was closed (its close button) or request_close() was called.
   bool should_close() const;
