@@ -4,6 +4,7 @@
 
 #include "args.h"
 #include "commands.h"
+#include "detector_options.h"
 #include "output_safety.h"
 #include "relief/ingest/detect_targets.h"
 
@@ -56,20 +57,9 @@ int run_detect(const std::vector<std::string>& argv) {
   ingest::DetectOptions o;
   o.input = args->positional()[0];
   o.geojson = *args->get("--output");
-  auto level = args->get_double("--level");
-  if (!level) return report_error(level.error().message);
-  if (*level) {
-    if (!(**level > 0 && **level <= 1)) return report_error("--level: must be in (0, 1]");
-    o.detector.level = **level;
-  }
-  auto sensitivity = args->get_double("--sensitivity");
-  if (!sensitivity) return report_error(sensitivity.error().message);
-  if (*sensitivity) {
-    if (!(**sensitivity > 0 && **sensitivity <= 100)) {
-      return report_error("--sensitivity: must be in (0, 100]");
-    }
-    o.detector.sensitivity = **sensitivity;
-  }
+  auto detector = parse_detector_params(*args, "--level", "--sensitivity");
+  if (!detector) return report_error(detector.error().message);
+  o.detector = *detector;
   if (auto a = args->get("--analysis")) o.analysis_json = *a;
   if (auto p = args->get("--plot")) o.analysis_png = *p;
   if (auto at = args->get("--analyse")) {

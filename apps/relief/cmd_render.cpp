@@ -192,6 +192,17 @@ int render_still(const Args& args, RenderSetup& setup) {
                          {"too_coarse_quads", frame->refine->too_coarse},
                          {"unresolved_diamonds", frame->refine->unresolved}};
     }
+    if (setup.detect) {
+      nlohmann::json hints = nlohmann::json::array();
+      for (const view::TargetHint& h : (*scene)->last_hints()) {
+        hints.push_back({{"lon", h.lon},
+                         {"lat", h.lat},
+                         {"amplitude", h.detection.amplitude},
+                         {"pslr_db", h.detection.pslr_db},
+                         {"axes_deg", {h.detection.direction[0], h.detection.direction[1]}}});
+      }
+      stats["hints"] = hints;
+    }
     if (auto st = write_json(*path, stats.dump(1)); !st) {
       return report_error(st.error().message);
     }
@@ -220,6 +231,9 @@ int run_render(const std::vector<std::string>& command_line) {
   auto args = Args::parse(argv,
                           {{"--output", "-o"},
                            {"--imagery"},
+                           {"--detect", "", false},
+                           {"--detect-level"},
+                           {"--detect-sensitivity"},
                            {"--elevation"},
                            {"--fuse"},
                            {"--camera"},

@@ -107,7 +107,8 @@ Status check_view_outputs(const Args& args, const std::vector<std::string>& text
 
 // The whole store, seen from the south at 45 degrees.
 lod::Camera default_camera(const RenderSetup& s) {
-  const geo::GeoBox& e = s.store.manifest().extent;
+  const geo::GeoBox& e = s.has_elevation ? s.store.manifest().extent
+                                         : s.textures.layers.front().store->manifest().extent;
   const double range = std::max(e.height(), e.width() * 0.75) * 111e3 * 1.2;
   return lod::look_at(0.5 * (e.west + e.east), 0.5 * (e.south + e.north), 0, range, 0, -45, s.fov,
                       s.width, s.height);
@@ -199,8 +200,9 @@ Status export_recorded_path(const Args& args, RenderSetup& setup, const view::Pa
   auto movie = args.get("--export-movie");
   if (!movie) return {};
   // The store too: a remote one is exported with the path prefetched.
-  auto render_args = Args::parse({args.positional()[0], "--path", file.string(), "-o", *movie},
-                                 {{"--path"}, {"--output", "-o"}}, "view");
+  std::vector<std::string> argv = {"--path", file.string(), "-o", *movie};
+  if (!args.positional().empty()) argv.insert(argv.begin(), args.positional()[0]);
+  auto render_args = Args::parse(argv, {{"--path"}, {"--output", "-o"}}, "view");
   if (!render_args) return std::unexpected(render_args.error());
   if (render_path(*render_args, setup) != 0) {  // its error is on stderr
     return fail("--export-movie: " + *movie + ": the export failed");
@@ -222,13 +224,14 @@ int view_session(const Args& args, RenderSetup& setup) {
   window::WindowOptions wo;
   wo.width = setup.width;
   wo.height = setup.height;
-  wo.title = "relief: " + args.positional()[0];
+  wo.title = "relief: " +
+             (args.positional().empty() ? setup.textures.paths.front() : args.positional()[0]);
   wo.vsync = !args.has("--no-vsync");
   auto window = window::Window::create(wo);
   if (!window) return report_error(window.error().message);
-  auto viewer =
-      window::Viewer::create(**window, setup.store, setup.imagery ? &*setup.imagery : nullptr, so,
-                             *options, steady_clock());
+  auto viewer = window::Viewer::create(**window, setup.has_elevation ? &setup.store : nullptr,
+                                       setup.imagery ? &*setup.imagery : nullptr, so, *options,
+                                       steady_clock());
   if (!viewer) return report_error(viewer.error().message);
   auto summary = (*viewer)->run();
   if (!summary) return report_error(summary.error().message);
@@ -276,6 +279,9 @@ int run_view(const std::vector<std::string>& command_line) {
   if (!textures) return report_error(textures.error().message);
   auto args = Args::parse(argv,
                           {{"--imagery"},
+                           {"--detect", "", false},
+                           {"--detect-level"},
+                           {"--detect-sensitivity"},
                            {"--elevation"},
                            {"--fuse"},
                            {"--camera"},
@@ -303,7 +309,6 @@ int run_view(const std::vector<std::string>& command_line) {
                            {"--cache-size"}},
                           "view");
   if (!args) return report_error(args.error().message);
-  if (args->positional().size() != 1) return report_error("view: expected exactly one STORE");
   if (args->get("--camera") && args->get("--look-at")) {
     return report_error("view: give at most one of --camera and --look-at");
   }

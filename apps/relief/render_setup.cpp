@@ -1,10 +1,12 @@
 #include "render_setup.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <limits>
 
 #include <fmt/format.h>
 
+#include "detector_options.h"
 #include "relief/base/file_io.h"
 #include "relief/base/units.h"
 #include "relief/pipeline/fused_elevation.h"
@@ -61,11 +63,19 @@ Result<tiles::Store> fuse_elevation_options(const Args& args, const std::string&
 Result<RenderSetup> parse_render_setup(const Args& args, TextureLayers textures) {
   const bool textured = !textures.layers.empty();
   if (args.positional().size() > 1 || (args.positional().empty() && !textured)) {
-    return fail(textured ? "render: expected at most one elevation STORE"
-                         : "render: expected exactly one STORE");
+    return fail(textured ? "expected at most one elevation STORE"
+                         : "expected one elevation STORE (or --texture layers)");
   }
   RenderSetup s;
   s.textures = std::move(textures);
+  s.detect = args.has("--detect");
+  s.detector = RELIEF_TRY(parse_detector_params(args, "--detect-level", "--detect-sensitivity"));
+  if (s.detect && std::none_of(s.textures.layers.begin(), s.textures.layers.end(),
+                               [](const render::TextureLayer& l) {
+                                 return l.store->manifest().kind == tiles::DatasetKind::Sar;
+                               })) {
+    return fail("--detect: needs a SAR texture layer (--texture SAR_STORE)");
+  }
   if (auto size = args.get("--size")) {
     char x = 0, end = 0;
     if (std::sscanf(size->c_str(), "%d%c%d%c", &s.width, &x, &s.height, &end) != 3 || x != 'x' ||
@@ -148,6 +158,8 @@ view::SceneOptions scene_options(const RenderSetup& setup) {
       so.selection.texture = l.store;
     }
   }
+  so.detect = setup.detect;
+  so.detector = setup.detector;
   so.full_resolution = setup.full_resolution;
   so.mesh_level = setup.mesh_level;
   so.selection.mode = setup.lod_mode;

@@ -17,7 +17,9 @@ namespace relief::cli {
 struct RenderSetup {
   tiles::Store store;  // the elevation store, when has_elevation
   bool has_elevation = true;
-  TextureLayers textures;  // --texture layers (docs/gpu-processing.md)
+  TextureLayers textures;            // --texture layers (docs/gpu-processing.md)
+  bool detect = false;               // --detect: hints over the SAR layer (docs/target-hints.md)
+  process::DetectorParams detector;  // --detect-level, --detect-sensitivity
   std::optional<tiles::Store> imagery;
   int width = 1024, height = 768;
   double fov = 60, pixel_error = 1, exaggeration = 1;

@@ -26,6 +26,10 @@ const char* const kTextureOptionsHelp =
   --lens LON,LAT,RADIUS_M  a lens over the --texture before it: inside the circle
                      its samples go through the --lens-op chain instead
   --lens-op OP, --lens-param K=V  the lens's chain (as --texture-op, --texture-param)
+  --detect           point-target hints over the first SAR layer: a circle, the
+                     side-lobe axes and a PSLR bar per target (docs/target-hints.md)
+  --detect-level F, --detect-sensitivity T  as relief detect's --level (default
+                     0.15 of the maximum) and --sensitivity (default 1.5)
 )";
 
 namespace {

@@ -178,6 +178,35 @@ TEST(TextureRender, BadTextureOptionsAreOneLineErrors) {
                "--lens-op linear: comes before any --lens");
   expect_error({"--texture", sar, "--lens", "169.4485,-19.5273,100", "--lens-op", "nope"},
                "unknown operator 'nope'");
+  expect_error({"--texture", world.string(), "--detect"}, "--detect: needs a SAR texture layer");
+  expect_error({"--texture", sar, "--detect", "--detect-level", "2"},
+               "--detect-level: must be in (0, 1]");
+}
+
+// --detect draws the point targets' hints over the still and lists them in
+// --stats; without it, the same still has none of the hints' colours.
+TEST(TextureRender, DetectDrawsHintsAndListsThemInTheStats) {
+  const SarStores& s = stores();
+  ScratchDir dir("texture_detect");
+  const std::vector<std::string> common = {"--texture",       s.sar.string(),
+                                           "--texture-range", "0,150",
+                                           "--look-at",       "169.4490,-19.5308,0,400,0,-90"};
+  auto with_args = common;
+  for (const std::string& a :
+       {std::string("--detect"), std::string("--stats"), (dir / "s.json").string()}) {
+    with_args.push_back(a);
+  }
+  const Image with = render(with_args, dir / "with.png");
+  const Image without = render(common, dir / "without.png");
+  // The hints' colours (view::HintStyle's).
+  auto hint_pixels = [](const Image& image) {
+    return count_colour(image, 60, 230, 90) + count_colour(image, 240, 60, 50);
+  };
+  EXPECT_GT(hint_pixels(with), 20u);
+  EXPECT_EQ(hint_pixels(without), 0u);
+  std::ifstream in(dir / "s.json");
+  const std::string json((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(json.find("\"pslr_db\""), std::string::npos) << json.substr(0, 400);
 }
 
 }  // namespace

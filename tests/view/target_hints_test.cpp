@@ -11,8 +11,11 @@
 #include <thread>
 
 #include "../ingest/built_stores.h"
+#include "../support/images.h"
 #include "../support/test_support.h"
+#include "gl_scene_test.h"
 #include "relief/render/overlay.h"
+#include "relief/view/scene.h"
 #include "relief/view/target_hints.h"
 
 namespace relief::view {
@@ -24,7 +27,7 @@ const tiles::Store& sar() {
   ingest::BuildOptions o;
   o.inputs = {testing::data("sar/umbra_mount_yasur.tif")};
   o.kind = tiles::DatasetKind::Sar;
-  return testing::built_store("umbra_hints", o);
+  return testing::built_store("umbra", o);  // shared with texture_layers_test
 }
 
 std::vector<geo::TileKey> level_tiles(const tiles::Store& s, int level) {
@@ -96,16 +99,20 @@ TEST(TargetHints, TheWorkersHintsEqualInlineDetectionAndFramesNeverWait) {
   ASSERT_TRUE(inline_hints);
   auto waited = (*inline_hints)->hints(keys, true);
   ASSERT_TRUE(later && waited);
-  ASSERT_EQ(later->size(), waited->size());
-  EXPECT_GT(waited->size(), 0u);
-  EXPECT_LE(first->size(), waited->size());
-  for (size_t i = 0; i < waited->size(); ++i) {
-    EXPECT_EQ((*later)[i].detection.x, (*waited)[i].detection.x);
-    EXPECT_EQ((*later)[i].detection.y, (*waited)[i].detection.y);
+  // Nothing was detected before the first call: every tile was queued.
+  EXPECT_EQ(first->missing, keys.size());
+  EXPECT_TRUE(first->hints.empty());
+  EXPECT_EQ(later->missing, 0u);
+  EXPECT_EQ(waited->missing, 0u);
+  ASSERT_EQ(later->hints.size(), waited->hints.size());
+  EXPECT_GT(waited->hints.size(), 0u);
+  for (size_t i = 0; i < waited->hints.size(); ++i) {
+    EXPECT_EQ(later->hints[i].detection.x, waited->hints[i].detection.x);
+    EXPECT_EQ(later->hints[i].detection.y, waited->hints[i].detection.y);
   }
   // The analysis of the strongest hint: both axes measured.
   const TargetHint& strongest = *std::max_element(
-      waited->begin(), waited->end(),
+      waited->hints.begin(), waited->hints.end(),
       [](const auto& a, const auto& b) { return a.detection.amplitude < b.detection.amplitude; });
   auto analysis = (*inline_hints)->analyse(strongest, 16);
   ASSERT_TRUE(analysis) << analysis.error().message;
@@ -155,6 +162,80 @@ TEST(TargetHints, TheOverlayDrawsLinesOverAFrameAndBadStoresAreRefused) {
   auto elevation = TargetHints::create(testing::pyrenees_store(), {});
   ASSERT_FALSE(elevation);
   EXPECT_NE(elevation.error().message.find("needs a SAR amplitude store"), std::string::npos);
+}
+
+// Frames of the SAR image on the bare ellipsoid, with and without hints.
+class SceneHints : public GlSceneTest {
+ protected:
+  void SetUp() override { set_up_gl(kCamera.width, kCamera.height_px); }
+
+  Result<std::unique_ptr<Scene>> scene(bool detect, bool interactive,
+                                       const tiles::Store& store = sar()) {
+    SceneOptions o;
+    o.interactive = interactive;
+    o.detect = detect;
+    render::TextureLayer l;
+    l.store = &store;
+    l.range_max = static_cast<float>(store.manifest().stats.mean * 3);
+    o.texture_layers.push_back(l);
+    o.selection.texture = &store;  // quads down to the texture's finest level
+    return Scene::create(nullptr, nullptr, o, clock_);
+  }
+
+  // Straight down from 400 m on the image's strongest targets: the finest
+  // levels are drawn (coarser levels average the targets away).
+  const lod::Camera kCamera = lod::look_at(169.4490, -19.5308, 0, 400, 0, -90, 60, 320, 240);
+};
+
+size_t hint_coloured_pixels(const std::vector<uint8_t>& rgba) {
+  const testing::Image image{0, 0, rgba};
+  const HintStyle style;
+  return testing::count_colour(image, style.good[0], style.good[1], style.good[2]) +
+         testing::count_colour(image, style.bad[0], style.bad[1], style.bad[2]);
+}
+
+TEST_F(SceneHints, HintsAreDrawnOverTheFrameAndInteractiveFramesWaitForNone) {
+  auto plain = scene(false, false);
+  ASSERT_TRUE(plain) << plain.error().message;
+  auto f = (*plain)->draw(kCamera, *target_);
+  ASSERT_TRUE(f) << f.error().message;
+  EXPECT_EQ(f->hints, 0u);
+  const std::vector<uint8_t> without = *target_->read_rgba();
+  EXPECT_EQ(hint_coloured_pixels(without), 0u);
+
+  auto complete = scene(true, false);
+  ASSERT_TRUE(complete) << complete.error().message;
+  f = (*complete)->draw(kCamera, *target_);
+  ASSERT_TRUE(f) << f.error().message;
+  EXPECT_TRUE(f->complete);
+  EXPECT_GT(f->hints, 0u);
+  EXPECT_EQ(f->hints, (*complete)->last_hints().size());
+  const std::vector<uint8_t> with = *target_->read_rgba();
+  EXPECT_GT(hint_coloured_pixels(with), 20u);
+
+  // Interactive: the first frames draw what is detected so far and are not
+  // complete while tiles wait; the frames then converge to the complete one.
+  auto interactive = scene(true, true);
+  ASSERT_TRUE(interactive) << interactive.error().message;
+  f = (*interactive)->draw(kCamera, *target_);
+  ASSERT_TRUE(f) << f.error().message;
+  EXPECT_FALSE(f->complete);
+  for (int i = 0; i < 2000 && !f->complete; ++i) {
+    std::this_thread::sleep_for(5ms);
+    clock_.advance(std::chrono::milliseconds(40));
+    f = (*interactive)->draw(kCamera, *target_);
+    ASSERT_TRUE(f) << f.error().message;
+  }
+  ASSERT_TRUE(f->complete);
+  EXPECT_EQ(f->hints, (*complete)->last_hints().size());
+  EXPECT_EQ(*target_->read_rgba(), with);
+}
+
+TEST_F(SceneHints, DetectionNeedsASarLayer) {
+  auto none = scene(true, false, testing::pyrenees_store());
+  ASSERT_FALSE(none);
+  EXPECT_NE(none.error().message.find("--detect: needs a SAR texture layer"), std::string::npos)
+      << none.error().message;
 }
 
 }  // namespace

@@ -10,7 +10,7 @@
 
 #include "../ingest/built_stores.h"
 #include "../support/test_support.h"
-#include "relief/base/manual_clock.h"
+#include "gl_scene_test.h"
 #include "relief/view/scene.h"
 
 namespace relief::view {
@@ -52,17 +52,9 @@ render::TextureLayer layer(gpuprocess::OperatorChain chain, float opacity = 1,
   return l;
 }
 
-class TextureLayersTest : public ::testing::Test {
+class TextureLayersTest : public GlSceneTest {
  protected:
-  void SetUp() override {
-    auto context = render::GlContext::create_headless();
-    ASSERT_TRUE(context) << context.error().message;
-    context_ = std::move(*context);
-    auto target = render::make_offscreen_target(kDown.width, kDown.height_px);
-    ASSERT_TRUE(target) << target.error().message;
-    target_ = std::move(*target);
-  }
-  void TearDown() override { clock_.set_free(true); }
+  void SetUp() override { set_up_gl(kDown.width, kDown.height_px); }
 
   // A scene of `layers` on the bare ellipsoid (no elevation store).
   std::unique_ptr<Scene> scene(std::vector<render::TextureLayer> layers, bool interactive) {
@@ -88,10 +80,6 @@ class TextureLayersTest : public ::testing::Test {
     EXPECT_TRUE(pixels) << pixels.error().message;
     return pixels ? *pixels : std::vector<uint8_t>{};
   }
-
-  ManualClock clock_;
-  std::unique_ptr<render::GlContext> context_;
-  std::unique_ptr<render::RenderTarget> target_;
 };
 
 TEST_F(TextureLayersTest, AParameterChangeLeavesNoStaleTileInTheNextFrame) {

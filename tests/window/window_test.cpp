@@ -79,7 +79,7 @@ class WindowTest : public ::testing::Test {
   std::unique_ptr<Viewer> viewer(const ViewerOptions& o, const Clock& clock) {
     view::SceneOptions so;
     so.mesh_level = 3;
-    auto v = Viewer::create(*window_, testing::pyrenees_store(), nullptr, so, o, clock);
+    auto v = Viewer::create(*window_, &testing::pyrenees_store(), nullptr, so, o, clock);
     EXPECT_TRUE(v) << v.error().message;
     return v ? std::move(*v) : nullptr;
   }
@@ -482,6 +482,49 @@ TEST(ViewCommand, AScriptedSessionExportsItsRecordedPathAsAMovie) {
   EXPECT_EQ(info.width, 160);
   EXPECT_EQ(info.height, 120);
   EXPECT_EQ(info.frame_rate, "5/1");
+}
+
+// SAR processed at draw time on the bare ellipsoid (no elevation store),
+// with the detector's hints: the session plays, completes and its screenshot
+// shows hints.
+TEST(ViewCommand, ASarLayerWithHintsAndNoElevationStore) {
+  ScratchDir dir("view_sar");
+  const auto sar = dir / "sar", path = dir / "path.json", stats = dir / "stats.json",
+             shot = dir / "shot.png";
+  ASSERT_EQ(testing::run_relief({"build", testing::data("sar/umbra_mount_yasur.tif"), "--kind",
+                                 "sar", "-o", sar.string(), "-q"})
+                .exit_code,
+            0);
+  std::ofstream(path) << R"({"fps": 5, "keyframes": [
+    {"time": 0, "camera": [169.4490, -19.5308, 450, 0, -90, 0]},
+    {"time": 0.4, "camera": [169.4490, -19.5308, 400, 0, -90, 0]}]})";
+  auto r = run_relief({"view",
+                       "--texture",
+                       sar.string(),
+                       "--texture-op",
+                       "lee",
+                       "--texture-param",
+                       "radius=3",
+                       "--texture-op",
+                       "linear",
+                       "--detect",
+                       "--play",
+                       path.string(),
+                       "--exit-when-done",
+                       "--stats",
+                       stats.string(),
+                       "--screenshot",
+                       shot.string(),
+                       "--size",
+                       "320x240",
+                       "--no-vsync"},
+                      kNoMesaLeakReport);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(read_json(stats)["summary"]["complete"].get<bool>());
+  const testing::Image image = testing::read_png(shot, 320, 240);
+  // The hints' colours (view::HintStyle's).
+  EXPECT_GT(testing::count_colour(image, 60, 230, 90) + testing::count_colour(image, 240, 60, 50),
+            20u);
 }
 
 TEST(ViewCommand, BadInputIsAOneLineError) {

@@ -8,7 +8,9 @@
 #include <fmt/format.h>
 
 #include "relief/lod/split_feedback.h"
+#include "relief/render/overlay.h"
 #include "relief/stream/radius_pager.h"
+#include "relief/view/ground.h"
 
 namespace relief::view {
 
@@ -55,6 +57,11 @@ struct Scene::Impl {
   std::optional<lod::Camera> prefetch_camera;  // set_prefetch_camera()
   bool frozen = false;                         // set_selection_frozen()
   bool drawn = false;                          // a frame was drawn: `last` is its selection
+  // SceneOptions::detect: the SAR layer's store, its hints and their overlay.
+  const tiles::Store* hint_store = nullptr;
+  std::unique_ptr<TargetHints> hints;
+  std::unique_ptr<render::Overlay> overlay;
+  std::vector<TargetHint> last_hints;
 
   Impl(const tiles::Store* s, const tiles::Store* i, const SceneOptions& o, const Clock& c)
       : store(s), imagery(i), options(o), clock(c), mesh(mesh_level(s, o)) {
@@ -73,6 +80,45 @@ struct Scene::Impl {
   // The brute-force reference has one vertex per finest sample.
   static int mesh_level(const tiles::Store* s, const SceneOptions& o) {
     return o.full_resolution && s ? static_cast<int>(std::log2(s->grid().height())) : o.mesh_level;
+  }
+
+  // Draws `selection` with the texture and imagery loaders taking the
+  // renderer's requests.
+  Result<render::FrameStats> draw_selection(const lod::View& view, const lod::Selection& selection,
+                                            render::RenderTarget& target,
+                                            const lod::RefinedMesh* refined) {
+    if (imagery_loader) imagery_loader->begin_frame();
+    for (auto& l : layer_loaders) l->begin_frame();
+    auto frame = renderer->draw(view, selection, target, options.render, refined);
+    if (imagery_loader) imagery_loader->end_frame();
+    for (auto& l : layer_loaders) l->end_frame();
+    return frame;
+  }
+
+  // The hints of the hint store's tiles under `selection` (each quad's tile,
+  // or its ancestor at the store's finest level), drawn over the frame.
+  Status draw_hints(const lod::View& view, const lod::Selection& selection,
+                    render::RenderTarget& target, FrameReport& report, Scene& scene) {
+    const tiles::Manifest& m = hint_store->manifest();
+    std::vector<geo::TileKey> keys;
+    for (const lod::SelectedQuad& q : selection.quads) {
+      if (q.key.level < m.min_level) continue;
+      const int shift = std::max(0, q.key.level - m.max_level);
+      keys.push_back({q.key.level - shift, q.key.x >> shift, q.key.y >> shift});
+    }
+    std::sort(keys.begin(), keys.end());
+    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+    HintSet set = RELIEF_TRY(hints->hints(keys, !loader && layer_loaders.empty()));
+    report.hints = set.hints.size();
+    report.hint_tiles_pending = set.missing;
+    Ground ground;
+    if (store) ground = resident_ground(scene);
+    const auto height = [&](double lon, double lat) {
+      return ground ? ground(lon, lat).value_or(0.0) : 0.0;
+    };
+    const std::vector<render::OverlayLine> lines = hint_glyphs(view, set.hints, {}, height);
+    last_hints = std::move(set.hints);
+    return overlay->draw(lines, target);
   }
 
   Status prefetch_along_motion(const lod::Camera& camera) {
@@ -157,6 +203,17 @@ Result<std::unique_ptr<Scene>> Scene::create(const tiles::Store* elevation,
     impl->renderer = RELIEF_TRY(
         render::TerrainRenderer::create(*impl->terrain, std::move(layers), options.gpu_budget));
   }
+  if (options.detect) {
+    for (const render::TextureLayer& l : options.texture_layers) {
+      if (l.store->manifest().kind == tiles::DatasetKind::Sar) {
+        impl->hint_store = l.store;
+        break;
+      }
+    }
+    if (!impl->hint_store) return fail("--detect: needs a SAR texture layer (--texture SAR_STORE)");
+    impl->hints = RELIEF_TRY(TargetHints::create(*impl->hint_store, options.detector));
+    impl->overlay = RELIEF_TRY(render::Overlay::create());
+  }
   return std::unique_ptr<Scene>(new Scene(std::move(impl)));
 }
 
@@ -184,10 +241,8 @@ Result<FrameReport> Scene::draw(const lod::Camera& camera, render::RenderTarget&
   const auto start = m.clock.now();
   if (m.frozen && m.drawn) {  // the last frame's pins stay: no begin_frame()
     const lod::RefinedMesh* refined = m.last_refined ? &*m.last_refined : nullptr;
-    if (m.imagery_loader) m.imagery_loader->begin_frame();  // the renderer requests imagery
-    auto frame = m.renderer->draw(view, m.last, target, m.options.render, refined);
-    if (m.imagery_loader) m.imagery_loader->end_frame();
-    report.draw = RELIEF_TRY(std::move(frame));
+    report.draw = RELIEF_TRY(m.draw_selection(view, m.last, target, refined));
+    if (m.hints) RELIEF_CHECK(m.draw_hints(view, m.last, target, report, *this));
     report.frame_seconds = seconds_between(start, m.clock.now());
     report.cpu_seconds = report.frame_seconds - report.draw.gpu_seconds;
     report.selection = m.last.stats;
@@ -227,17 +282,14 @@ Result<FrameReport> Scene::draw(const lod::Camera& camera, render::RenderTarget&
     report.refine_cache_tiles = m.refine_cache->tiles();
     report.refine_cache_bytes = m.refine_cache->bytes();
   }
-  if (m.imagery_loader) m.imagery_loader->begin_frame();  // the renderer requests imagery
-  for (auto& l : m.layer_loaders) l->begin_frame();
-  auto frame =
-      m.renderer->draw(view, selection, target, m.options.render, refined ? &*refined : nullptr);
-  if (m.imagery_loader) m.imagery_loader->end_frame();
-  for (auto& l : m.layer_loaders) l->end_frame();
-  report.draw = RELIEF_TRY(std::move(frame));
+  report.draw =
+      RELIEF_TRY(m.draw_selection(view, selection, target, refined ? &*refined : nullptr));
+  if (m.hints) RELIEF_CHECK(m.draw_hints(view, selection, target, report, *this));
   report.frame_seconds = seconds_between(start, m.clock.now());
   report.cpu_seconds = report.frame_seconds - report.draw.gpu_seconds;
   report.selection = selection.stats;
-  report.complete = selection.stats.waiting == 0 && !wants_more && report.draw.texture_misses == 0;
+  report.complete = selection.stats.waiting == 0 && !wants_more &&
+                    report.draw.texture_misses == 0 && report.hint_tiles_pending == 0;
   if (m.imagery_loader) {
     const stream::LoaderStats is = m.imagery_loader->stats();
     report.complete =
@@ -296,6 +348,14 @@ const lod::Selection& Scene::last_selection() const {
 }
 const lod::RefinedMesh* Scene::last_refined() const {
   return impl_->last_refined ? &*impl_->last_refined : nullptr;
+}
+
+const std::vector<TargetHint>& Scene::last_hints() const {
+  return impl_->last_hints;
+}
+
+TargetHints* Scene::target_hints() {
+  return impl_->hints.get();
 }
 
 Result<lod::MeasuredError> Scene::measure_last_frame(const lod::Camera& camera, int samples) {

@@ -59,9 +59,8 @@ std::vector<render::OverlayLine> hint_glyphs(
     double sx = 0, sy = 0;
     if (lod::below_horizon(view.eye, p, 0) || !view.project(p, sx, sy)) continue;
     if (sx < -r || sy < -r || sx > view.width + r || sy > view.height + r) continue;
-    const bool good = hint.detection.pslr_db <= style.good_pslr_db;
     const std::array<uint8_t, 4> colour =
-        good ? std::array<uint8_t, 4>{60, 230, 90, 255} : std::array<uint8_t, 4>{240, 60, 50, 255};
+        hint.detection.pslr_db <= style.good_pslr_db ? style.good : style.bad;
     auto line = [&](double ax, double ay, double bx, double by, std::array<uint8_t, 4> c) {
       lines.push_back({static_cast<float>(ax), static_cast<float>(ay), static_cast<float>(bx),
                        static_cast<float>(by), c});
@@ -86,7 +85,7 @@ std::vector<render::OverlayLine> hint_glyphs(
       const double dx = qx - sx, dy = qy - sy, len = std::hypot(dx, dy);
       if (!(len > 0)) continue;
       const double ux = dx / len * 1.8 * r, uy = dy / len * 1.8 * r;
-      line(sx - ux, sy - uy, sx + ux, sy + uy, {255, 255, 255, 255});
+      line(sx - ux, sy - uy, sx + ux, sy + uy, style.axes);
     }
     // The PSLR bar under the circle: its length grows with the side lobes'
     // strength, full width at 0 dB, none at -30 dB.
@@ -178,9 +177,10 @@ Result<std::unique_ptr<TargetHints>> TargetHints::create(const tiles::Store& sto
   return std::unique_ptr<TargetHints>(new TargetHints(std::move(impl)));
 }
 
-Result<std::vector<TargetHint>> TargetHints::hints(std::span<const geo::TileKey> tiles, bool wait) {
+Result<HintSet> TargetHints::hints(std::span<const geo::TileKey> tiles, bool wait) {
   Impl& s = *impl_;
-  std::vector<TargetHint> out;
+  HintSet set;
+  std::vector<TargetHint>& out = set.hints;
   std::vector<geo::TileKey> missing;
   {
     std::lock_guard lock(s.mutex);
@@ -209,8 +209,9 @@ Result<std::vector<TargetHint>> TargetHints::hints(std::span<const geo::TileKey>
       }
     }
     s.wake.notify_one();
+    set.missing = missing.size();
   }
-  return out;
+  return set;
 }
 
 Result<process::TargetAnalysis> TargetHints::analyse(const TargetHint& hint,

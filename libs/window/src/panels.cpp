@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 #include <imgui.h>
 
+#include "layer_panels.h"
 #include "relief/base/units.h"
 #include "relief/view/path_player.h"
 #include "viewer_state.h"
@@ -19,7 +20,8 @@ void text(const std::string& s) {
 
 void layers(Viewer::Impl& v) {
   if (!ImGui::CollapsingHeader("Layers", ImGuiTreeNodeFlags_DefaultOpen)) return;
-  text(fmt::format("elevation: {}", v.elevation.root().filename().string()));
+  text(v.elevation ? fmt::format("elevation: {}", v.elevation->root().filename().string())
+                   : std::string("elevation: none (the ellipsoid)"));
   if (v.imagery) {
     ImGui::Checkbox("imagery", &v.imagery_wanted);
   } else {
@@ -133,6 +135,8 @@ void draw_panels(Viewer::Impl& v) {
                    v.recording ? ", recording (F9)" : ""));
   load_progress(v);
   layers(v);
+  texture_layer_panels(v);
+  target_panel(v);
   level_of_detail(v);
   caches(v);
   frame_statistics(v);

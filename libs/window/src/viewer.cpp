@@ -35,7 +35,7 @@ Status Viewer::Impl::make_scene() {
   scene.reset();  // its GPU memory goes before the new one's arrives
   view::SceneOptions so = scene_options;
   const tiles::Store* layer = imagery_on ? imagery : nullptr;
-  if (!layer) so.selection.texture = nullptr;
+  if (!layer && so.selection.texture == imagery) so.selection.texture = nullptr;
   scene = RELIEF_TRY(view::Scene::create(elevation, layer, so, clock));
   scene->set_selection_frozen(frozen);  // a new scene has no selection yet: frozen from its first
   progress = {};
@@ -147,7 +147,7 @@ void Viewer::Impl::take_screenshot() {
   }
 }
 
-Result<std::unique_ptr<Viewer>> Viewer::create(Window& window, const tiles::Store& elevation,
+Result<std::unique_ptr<Viewer>> Viewer::create(Window& window, const tiles::Store* elevation,
                                                const tiles::Store* imagery,
                                                const view::SceneOptions& scene,
                                                const ViewerOptions& options, const Clock& clock) {

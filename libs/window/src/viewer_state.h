@@ -45,7 +45,7 @@ struct LoadRate {
 };
 
 struct Viewer::Impl {
-  Impl(Window& w, const tiles::Store& e, const tiles::Store* i, const view::SceneOptions& so,
+  Impl(Window& w, const tiles::Store* e, const tiles::Store* i, const view::SceneOptions& so,
        const ViewerOptions& o, const Clock& c)
       : window(w),
         elevation(e),
@@ -56,7 +56,7 @@ struct Viewer::Impl {
         speed_lod(o.speed_lod) {}
 
   Window& window;
-  const tiles::Store& elevation;
+  const tiles::Store* elevation;  // null: the bare ellipsoid
   const tiles::Store* imagery;
   view::SceneOptions scene_options;  // pixel_error: the still threshold
   ViewerOptions options;
@@ -91,6 +91,10 @@ struct Viewer::Impl {
   std::vector<ViewerFrame> frames;
   std::vector<std::string> screenshots;
   bool panels = true;
+
+  std::string layer_error;                              // the texture-layer panel's refused change
+  std::optional<std::pair<int64_t, int64_t>> analysed;  // the target analysed, by sample
+  std::optional<process::TargetAnalysis> analysis;
 
   double cursor_x = -1, cursor_y = -1;
   std::optional<view::Pick> pick;

@@ -22,6 +22,7 @@
 #include "relief/lod/selection.h"
 #include "relief/render/terrain_renderer.h"
 #include "relief/stream/tile_loader.h"
+#include "relief/view/target_hints.h"
 
 namespace relief::view {
 
@@ -62,6 +63,10 @@ struct SceneOptions {
   // Their `tiles` are the scene's: loaders of `imagery_budget` each in
   // interactive frames.
   std::vector<render::TextureLayer> texture_layers;
+  // Detector hints (target_hints.h) over the first SAR texture layer: the
+  // point targets of the tiles each frame shows, drawn over the frame.
+  bool detect = false;
+  process::DetectorParams detector;
 };
 
 struct FrameReport {
@@ -76,6 +81,9 @@ struct FrameReport {
   // Everything this frame wanted was resident and drawn (elevation and
   // imagery): the frame equals the complete frame of its camera.
   bool complete = false;
+  // SceneOptions::detect: hints drawn, and tiles whose hints are still being
+  // detected (interactive frames; such a frame is not complete).
+  size_t hints = 0, hint_tiles_pending = 0;
 };
 
 class Scene {
@@ -126,6 +134,10 @@ class Scene {
   lod::TerrainModel& terrain();
   const lod::Selection& last_selection() const;  // of the last draw()
   const lod::RefinedMesh* last_refined() const;  // of the last draw(), edge-mark frames
+  // SceneOptions::detect: the hints the last frame drew, and their detector
+  // (for the analysis of one); null without detection.
+  const std::vector<TargetHint>& last_hints() const;
+  TargetHints* target_hints();
   // The last frame's measured screen error (lod/measured_error.h) over
   // `samples` random finest samples.
   Result<lod::MeasuredError> measure_last_frame(const lod::Camera& camera, int samples);

@@ -10,7 +10,9 @@
 // A tile is detected on its own interior with its overlap border as the
 // detector's margin, so the hints of a level's tiles are the detections of
 // the whole level, tile seams included (tested).
+#include <array>
 #include <cstddef>
+#include <cstdint>
 #include <functional>
 #include <memory>
 #include <span>
@@ -43,6 +45,8 @@ struct HintStyle {
   // PSLR at or below this (the ideal sinc's -13.26 dB, rounded) is drawn
   // green, above it red: a target whose side lobes are too strong.
   double good_pslr_db = -13;
+  std::array<uint8_t, 4> good = {60, 230, 90, 255}, bad = {240, 60, 50, 255};
+  std::array<uint8_t, 4> axes = {255, 255, 255, 255};
 };
 
 // The hints as overlay lines seen through `view`: hints behind the horizon
@@ -51,6 +55,13 @@ struct HintStyle {
 std::vector<render::OverlayLine> hint_glyphs(
     const lod::View& view, std::span<const TargetHint> hints, const HintStyle& style = {},
     const std::function<double(double lon, double lat)>& height = nullptr);
+
+// The hints of some tiles, and how many of those tiles are still being
+// detected (their hints are not in `hints` yet).
+struct HintSet {
+  std::vector<TargetHint> hints;
+  size_t missing = 0;
+};
 
 // The hints of a store's tiles, detected on a worker thread and cached per
 // tile. Thread-safe.
@@ -66,7 +77,7 @@ class TargetHints {
   // The hints of `tiles` detected so far; the others are queued for the
   // worker. With `wait`, detects the missing ones on the calling thread
   // first. Tiles the store does not have give none.
-  Result<std::vector<TargetHint>> hints(std::span<const geo::TileKey> tiles, bool wait);
+  Result<HintSet> hints(std::span<const geo::TileKey> tiles, bool wait);
   // The analysis of a hint (cross-sections along both axes, PSLR, -3 dB
   // widths) from its tile, `half_length` samples either side at most (the
   // tile and its border bound it; beyond, the sections are NaN).

@@ -83,10 +83,10 @@ struct ViewerSummary {
 
 class Viewer {
  public:
-  // `elevation`, `imagery` (may be null), `window` and `clock` outlive the
-  // viewer. The scene is made here (and again when the imagery layer is
-  // switched on or off).
-  static Result<std::unique_ptr<Viewer>> create(Window& window, const tiles::Store& elevation,
+  // `elevation` (null: the bare ellipsoid, under texture layers), `imagery`
+  // (may be null), `window` and `clock` outlive the viewer. The scene is
+  // made here (and again when the imagery layer is switched on or off).
+  static Result<std::unique_ptr<Viewer>> create(Window& window, const tiles::Store* elevation,
                                                 const tiles::Store* imagery,
                                                 const view::SceneOptions& scene,
                                                 const ViewerOptions& options, const Clock& clock);
