@@ -43,3 +43,8 @@ rm -rf "$SAR" "$SAR-lee" "$SAR-grey"
 "$RELIEF" process "$SAR-lee" -o "$SAR-grey" --op ext-schlick --param d=0.7
 "$RELIEF" detect data/sar/umbra_mount_yasur.tif -o "$SAR-targets.geojson" \
   --analysis "$SAR-target.json" --plot "$SAR-target.png"
+# The same processing at draw time on the GPU (the raw store, Lee and a linear
+# mapping per visible quad), draped on the ellipsoid, with the detector's hints.
+"$RELIEF" render --texture "$SAR" --texture-op lee --texture-param radius=3 --texture-op linear \
+  --detect --detect-level 0.25 --look-at 169.4490,-19.5308,0,600,0,-90 --size 1024x768 \
+  -o "$SAR-drawtime.png"
