@@ -1,15 +1,25 @@
 #pragma once
-// What the scene tests share: a headless GL context, an offscreen target of
+// What the scene tests share: the SAR store, a headless GL context, an offscreen target of
 // their frame's size and a manual clock (freed at the end, so the loaders'
 // retry pauses end at once).
 #include <gtest/gtest.h>
 
 #include <memory>
 
+#include "../ingest/built_stores.h"
+#include "../support/test_support.h"
 #include "relief/base/manual_clock.h"
 #include "relief/render/render_target.h"
 
 namespace relief::view {
+
+// The bundled Umbra SAR image as a store, built once per test binary.
+inline const tiles::Store& sar() {
+  ingest::BuildOptions o;
+  o.inputs = {relief::testing::data("sar/umbra_mount_yasur.tif")};
+  o.kind = tiles::DatasetKind::Sar;
+  return relief::testing::built_store("umbra", o);
+}
 
 class GlSceneTest : public ::testing::Test {
  protected:

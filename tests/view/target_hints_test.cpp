@@ -23,13 +23,6 @@ namespace {
 
 using namespace std::chrono_literals;
 
-const tiles::Store& sar() {
-  ingest::BuildOptions o;
-  o.inputs = {testing::data("sar/umbra_mount_yasur.tif")};
-  o.kind = tiles::DatasetKind::Sar;
-  return testing::built_store("umbra", o);  // shared with texture_layers_test
-}
-
 std::vector<geo::TileKey> level_tiles(const tiles::Store& s, int level) {
   std::vector<geo::TileKey> keys;
   for (const auto& e : s.index(level).entries()) keys.push_back(e.key);

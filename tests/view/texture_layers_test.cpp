@@ -18,13 +18,6 @@ namespace {
 
 using namespace std::chrono_literals;
 
-const tiles::Store& sar() {
-  ingest::BuildOptions o;
-  o.inputs = {testing::data("sar/umbra_mount_yasur.tif")};
-  o.kind = tiles::DatasetKind::Sar;
-  return testing::built_store("umbra", o);
-}
-
 // Straight down on the middle of the image, from 1.5 km.
 const lod::Camera kDown = lod::look_at(169.4485, -19.5273, 0, 1500, 0, -90, 60, 160, 120);
 
