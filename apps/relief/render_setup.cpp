@@ -60,6 +60,17 @@ Result<tiles::Store> fuse_elevation_options(const Args& args, const std::string&
   return pipeline::fuse_elevation_layers(std::move(layers), mode, executor);
 }
 
+std::vector<OptionSpec> with_scene_options(std::vector<OptionSpec> own) {
+  for (const char* name :
+       {"--imagery", "--detect-level", "--detect-sensitivity", "--elevation", "--fuse", "--camera",
+        "--look-at", "--size", "--fov", "--pixel-error", "--exaggeration", "--lod", "--sky",
+        "--gpu-budget", "--cache", "--cache-size"}) {
+    own.emplace_back(name);
+  }
+  own.emplace_back("--detect", "", false);
+  return own;
+}
+
 Result<RenderSetup> parse_render_setup(const Args& args, TextureLayers textures) {
   const bool textured = !textures.layers.empty();
   if (args.positional().size() > 1 || (args.positional().empty() && !textured)) {

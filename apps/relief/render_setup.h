@@ -35,6 +35,12 @@ struct RenderSetup {
 
 // `textures`: the --texture layers (take_texture_layers()); with any, the
 // elevation store is optional (they drape on the ellipsoid).
+// `own` (a command's options) and the options parse_render_setup() reads,
+// which `relief render` and `relief view` share: stores and layers (but the
+// --texture family, taken out before), camera, image, level of detail,
+// caches, detector hints.
+std::vector<OptionSpec> with_scene_options(std::vector<OptionSpec> own);
+
 Result<RenderSetup> parse_render_setup(const Args& args, TextureLayers textures = {});
 
 // The elevation store, or null (texture layers on the bare ellipsoid).
