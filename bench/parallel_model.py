@@ -12,9 +12,11 @@ The model, per view and mode, from the run with the fewest ranks N > 1
                   sort-first: select(N) x N / 16 (each node reads only its
                   window's tiles; optimistic: traversal does not shrink);
   composite(16) = bytes / 1.25 GB/s (10 Gbit/s links) + 20 us per message:
-                  sort-last binary swap: 8 W H (1 - 1/16) + 4 W H / 16 bytes
-                  per node in 4 + 1 rounds; sort-first: rank 0 receives
-                  4 W H 15/16 bytes in 15 messages.
+                  sort-last: 8 W H (1 - 1/16) + 4 W H / 16 bytes per node
+                  (uncompressed), in the messages of the compositor's rounds
+                  plus the gather (radix-k:8: 8 x 2, 7 + 1 + 1 messages;
+                  binary swap: 2 x 2 x 2 x 2, 4 + 1; direct send: 16, 15 + 1);
+                  sort-first: rank 0 receives 4 W H 15/16 bytes in 15 messages.
 Usage: parallel_model.py RESULTS CORES
 """
 import json
@@ -54,9 +56,25 @@ def figures(runs):
     }
 
 
-def shown(mode):  # sort-last-active -> sort-last:active
+def shown(mode):  # sort-last-active+binary-swap -> sort-last:active+binary-swap
+    mode, plus, composite = mode.partition("+")
     head, _, tail = mode.rpartition("-")
-    return f"{head}:{tail}"
+    return f"{head}:{tail}{plus}{composite}"
+
+
+def messages(composite, nodes):
+    """Messages per node of a sort-last compositor (--composite, as
+    parallel::composite_rounds factors the nodes: k - 1 per round) plus the
+    gather's one."""
+    if composite == "direct-send":
+        return nodes
+    k = 2 if composite == "binary-swap" else int(composite.partition(":")[2] or 8)
+    sent, left = 1, nodes
+    while left > 1:
+        factor = next((f for f in range(min(k, left), 1, -1) if left % f == 0), None)
+        factor = factor or next(f for f in range(k + 1, left + 1) if left % f == 0)
+        sent, left = sent + factor - 1, left // factor
+    return sent
 
 
 def model(mode, n, f, width, height):
@@ -65,7 +83,8 @@ def model(mode, n, f, width, height):
     if mode.startswith("sort-last"):
         select = f["select"]
         sent = 8 * pixels * (1 - 1 / NODES) + 4 * pixels / NODES
-        composite = 1e3 * (sent / BANDWIDTH + 5 * LATENCY)
+        count = messages(mode.partition("+")[2] or "radix-k", NODES)
+        composite = 1e3 * (sent / BANDWIDTH + count * LATENCY)
     else:
         select = f["select"] * n / NODES
         composite = 1e3 * (4 * pixels * (NODES - 1) / NODES / BANDWIDTH + (NODES - 1) * LATENCY)

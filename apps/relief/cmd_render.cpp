@@ -91,6 +91,8 @@ movie options (-o MOVIE.mp4):
   --parallel MODE    sort-first:h|v|grid (screen tiles), sort-last:block|quadtree|active
                      (quads, depth-composited) or wall:WALL.json (one display per rank,
                      written as OUT_rR_cC.png); stills and --path, complete frames
+  --composite C      sort-last's depth compositing: radix-k (default, rounds of at most 8
+                     ranks), radix-k:K, binary-swap or direct-send
   --parallel-timeout S  a rank that has not answered within S s fails the run (default 60)
 )";
 
@@ -250,6 +252,7 @@ int run_render(const std::vector<std::string>& command_line) {
                                               {"--codec"},
                                               {"--crf"},
                                               {"--parallel"},
+                                              {"--composite"},
                                               {"--parallel-timeout"}}),
                           "render");
   if (!args) return report_error(args.error().message);
@@ -265,6 +268,9 @@ int run_render(const std::vector<std::string>& command_line) {
   }
   if (auto safe = check_render_outputs(*args, textures->paths); !safe) {
     return report_error(safe.error().message);
+  }
+  if (args->get("--composite") && !args->get("--parallel")) {
+    return report_error("--composite: only with --parallel sort-last:...");
   }
   if (args->get("--parallel")) {
     if (!textures->layers.empty()) return report_error("--parallel: not with --texture layers yet");

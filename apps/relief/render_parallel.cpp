@@ -87,8 +87,9 @@ std::string display_file(const std::string& out, const parallel::Wall& wall, int
 
 class Run {
  public:
-  Run(const Args& args, const ParallelMode& mode, Comm& comm)
-      : args_(args), mode_(mode), comm_(comm) {}
+  Run(const Args& args, const ParallelMode& mode, const parallel::Compositing& compositing,
+      Comm& comm)
+      : args_(args), mode_(mode), compositing_(compositing), comm_(comm) {}
 
   int run() {
     // Errors every rank meets alike (arguments, store, wall file): rank 0
@@ -267,7 +268,7 @@ class Run {
     const uint64_t bytes_before = comm_.bytes_sent();
     std::vector<uint8_t> image;
     if (mode_.kind == ParallelMode::Kind::sort_last) {
-      image = RELIEF_TRY(parallel::depth_composite(comm_, layer));
+      image = RELIEF_TRY(parallel::depth_composite(comm_, layer, compositing_));
     } else if (mode_.kind == ParallelMode::Kind::sort_first) {
       image =
           RELIEF_TRY(parallel::gather_tiles(comm_, layer.rgba, tiles, whole.width, whole.height));
@@ -325,7 +326,8 @@ class Run {
                               {"width", width_},
                               {"height", height_}};
       if (mode_.kind == ParallelMode::Kind::sort_last) {
-        stats["compositing"] = parallel::compositing_method(comm_.size());
+        stats["compositing"] = parallel::to_string(compositing_);
+        stats["composite_rounds"] = parallel::composite_rounds(compositing_, comm_.size());
       }
       if (args_.get("--path")) {
         stats["frames"] = frames_;
@@ -347,6 +349,7 @@ class Run {
   static constexpr double kMaxPathFrames = 100000;
   const Args& args_;
   const ParallelMode& mode_;
+  const parallel::Compositing& compositing_;
   Comm& comm_;
   parallel::Wall wall_;
   std::string error_;
@@ -361,6 +364,15 @@ int render_parallel(const Args& args) {
   // A bad mode is said before MPI starts (by every rank alike).
   auto mode = parallel::parse_parallel_mode(*args.get("--parallel"));
   if (!mode) return report_error(mode.error().message);
+  parallel::Compositing compositing;
+  if (auto c = args.get("--composite")) {
+    if (mode->kind != ParallelMode::Kind::sort_last) {
+      return report_error("--composite: only with --parallel sort-last:...");
+    }
+    auto parsed = parallel::parse_compositing(*c);
+    if (!parsed) return report_error(parsed.error().message);
+    compositing = *parsed;
+  }
   double timeout = 60;
   if (auto t = args.get("--parallel-timeout")) {
     char* end = nullptr;
@@ -371,7 +383,7 @@ int render_parallel(const Args& args) {
   }
   auto comm = Comm::init(timeout);
   if (!comm) return report_error(comm.error().message);
-  return Run(args, *mode, **comm).run();
+  return Run(args, *mode, compositing, **comm).run();
 }
 
 }  // namespace relief::cli

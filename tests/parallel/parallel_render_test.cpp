@@ -128,6 +128,43 @@ INSTANTIATE_TEST_SUITE_P(Parallel, EveryMode,
                            return n;
                          });
 
+// Every compositor (radix-k groups, binary swap, direct send; binary swap
+// of 3 ranks is one round of 3) gives the single image exactly, and
+// --stats names it with its rounds and keeps each rank's composite time and
+// bytes.
+class EveryCompositor : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(EveryCompositor, MatchesTheSingleProcessImageOn2To4Ranks) {
+  ScratchDir dir("parallel_composite");
+  const std::string how = GetParam();
+  for (int ranks : {2, 3, 4}) {
+    const fs::path out = dir / fmt::format("{}.png", ranks), stats = dir / "stats.json";
+    auto r = parallel_render(ranks, "sort-last:active", out,
+                             {"--composite", how, "--stats", stats.string()});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const std::string what = fmt::format("{} on {} ranks", how, ranks);
+    EXPECT_EQ(differing_pixels(read_png(out, kWidth, kHeight), single()), 0u) << what;
+    const auto s = nlohmann::json::parse(*read_text_file(stats));
+    EXPECT_EQ(s["compositing"], how == "radix-k" ? "radix-k:8" : how) << what;
+    int product = 1;
+    for (const auto& k : s["composite_rounds"]) product *= k.get<int>();
+    EXPECT_EQ(product, ranks) << what;
+    for (const auto& rank : s["ranks"]) {
+      EXPECT_GT(rank["bytes_sent"].get<uint64_t>(), 0u) << what;
+      EXPECT_GE(rank["composite_ms"].get<double>(), 0.0) << what;
+    }
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Parallel, EveryCompositor,
+                         ::testing::Values("radix-k", "binary-swap", "direct-send"),
+                         [](const auto& param_info) {
+                           std::string n = param_info.param;
+                           std::replace_if(
+                               n.begin(), n.end(), [](char c) { return !isalnum(c); }, '_');
+                           return n;
+                         });
+
 // One rank drawing the whole view through a window as large as the view:
 // exactly today's image.
 TEST(Parallel, AWholeViewWindowIsTodaysImage) {
@@ -264,6 +301,12 @@ TEST(Parallel, BadModesAreOneLineErrors) {
                                 "--parallel-timeout"));
   EXPECT_TRUE(
       is_one_line_error(with({"--parallel", "wall:" + (dir / "none.json").string()}), "none.json"));
+  EXPECT_TRUE(
+      is_one_line_error(with({"--parallel", "sort-last:active", "--composite", "radix-k:1"}),
+                        "--composite: 'radix-k:1'"));
+  EXPECT_TRUE(is_one_line_error(with({"--parallel", "sort-first:h", "--composite", "radix-k"}),
+                                "--composite: only with --parallel sort-last"));
+  EXPECT_TRUE(is_one_line_error(with({"--composite", "radix-k"}), "--composite"));
   EXPECT_FALSE(fs::exists(dir / "out.png"));
 }
 

@@ -186,6 +186,94 @@ TEST(Composite, EncodedRowsMergeExactlyAsTheRawLayersAndSkipTheSky) {
   EXPECT_FALSE(merge_encoded(l, 0, 2, std::span(message.data(), 2), false));
 }
 
+TEST(Compositing, ParsesTheMethodsAndRejectsOthers) {
+  EXPECT_EQ(to_string(*parse_compositing("radix-k")), "radix-k:8");
+  EXPECT_EQ(parse_compositing("radix-k:3")->k, 3);
+  EXPECT_EQ(to_string(*parse_compositing("binary-swap")), "binary-swap");
+  EXPECT_EQ(to_string(*parse_compositing("direct-send")), "direct-send");
+  for (const char* bad : {"", "radix-k:", "radix-k:1", "radix-k:x", "radix-k:4x", "binary"}) {
+    auto c = parse_compositing(bad);
+    ASSERT_FALSE(c) << bad;
+    EXPECT_EQ(c.error().message.rfind("--composite: ", 0), 0u) << c.error().message;
+  }
+}
+
+TEST(Compositing, RoundsFactorTheRankCount) {
+  const Compositing radix8 = *parse_compositing("radix-k"),
+                    radix4 = *parse_compositing("radix-k:4");
+  const Compositing swap = *parse_compositing("binary-swap"),
+                    direct = *parse_compositing("direct-send");
+  using V = std::vector<int>;
+  EXPECT_EQ(composite_rounds(radix8, 1), V{});
+  EXPECT_EQ(composite_rounds(radix8, 3), V{3});
+  EXPECT_EQ(composite_rounds(radix8, 16), (V{8, 2}));
+  EXPECT_EQ(composite_rounds(radix4, 16), (V{4, 4}));
+  EXPECT_EQ(composite_rounds(radix4, 12), (V{4, 3}));
+  EXPECT_EQ(composite_rounds(radix4, 22), (V{2, 11}));  // 11 > 4: its own round
+  EXPECT_EQ(composite_rounds(swap, 8), (V{2, 2, 2}));
+  EXPECT_EQ(composite_rounds(swap, 6), (V{2, 3}));
+  EXPECT_EQ(composite_rounds(swap, 3), V{3});
+  EXPECT_EQ(composite_rounds(direct, 12), V{12});
+}
+
+// The serial reference: per pixel the nearest fragment, the lowest rank's on a tie.
+Layer composited(const std::vector<Layer>& layers) {
+  Layer out = layers[0];
+  for (size_t r = 1; r < layers.size(); ++r) keep_nearer(out, layers[r]);
+  return out;
+}
+
+// Every rank's rounds run in one process: each round's messages are made
+// from every rank's held layer before any rank merges (as over MPI), then
+// the rows each rank holds at the end are compared with the reference.
+TEST(Compositing, RadixKEqualsTheSerialCompositeForAnyRankCount) {
+  const int w = 23, h = 13;  // fewer rows than some rank counts' pieces: empty pieces too
+  for (const char* method : {"radix-k", "radix-k:2", "radix-k:3", "binary-swap", "direct-send"}) {
+    const Compositing how = *parse_compositing(method);
+    for (int n = 1; n <= 16; ++n) {
+      std::vector<Layer> layers;
+      for (int r = 0; r < n; ++r) layers.push_back(random_layer(w, h, unsigned(n * 100 + r)));
+      const Layer expected = composited(layers);
+      const std::vector<int> rounds = composite_rounds(how, n);
+      std::vector<std::vector<RadixRound>> schedule;
+      for (int r = 0; r < n; ++r) schedule.push_back(radix_schedule(r, rounds, h));
+      std::vector<Layer> held = layers;
+      for (size_t i = 0; i < rounds.size(); ++i) {
+        // outbox[from][m]: from's message to member m of its group
+        std::vector<std::vector<std::vector<std::byte>>> outbox;
+        for (int r = 0; r < n; ++r) outbox.push_back(round_messages(held[r], schedule[r][i]));
+        for (int r = 0; r < n; ++r) {
+          const RadixRound& round = schedule[r][i];
+          std::vector<std::vector<std::byte>> in(round.group.size());
+          for (size_t m = 0; m < round.group.size(); ++m) {
+            const int from = round.group[m];
+            EXPECT_EQ(schedule[from][i].group, round.group) << method << " " << n;
+            in[m] = outbox[from][round.position];
+          }
+          ASSERT_TRUE(merge_round(held[r], round, in)) << method << " " << n;
+        }
+      }
+      std::vector<int> covered(h, 0);
+      for (int r = 0; r < n; ++r) {
+        const auto [r0, r1] = final_rows(r, rounds, h);
+        for (int y = r0; y < r1; ++y) {
+          ++covered[y];
+          for (int x = 0; x < w; ++x) {
+            const size_t p = size_t(y) * w + x;
+            ASSERT_EQ(held[r].depth[p], expected.depth[p]) << method << " " << n << " rank " << r;
+            for (size_t c = 0; c < 4; ++c) {
+              ASSERT_EQ(held[r].rgba[p * 4 + c], expected.rgba[p * 4 + c])
+                  << method << " " << n << " rank " << r << " pixel " << p;
+            }
+          }
+        }
+      }
+      EXPECT_TRUE(std::all_of(covered.begin(), covered.end(), [](int c) { return c == 1; }))
+          << method << " " << n;
+    }
+  }
+}
+
 TEST(ViewWindow, TheWholeWindowHasTheViewsFrustumAndTilesShrinkIt) {
   lod::Camera c = lod::look_at(1.5, 42.5, 1500, 40000, 0, -30, 60, 320, 240);
   const lod::View v = *lod::make_view(c);

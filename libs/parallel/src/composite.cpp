@@ -2,16 +2,15 @@
 
 #include <algorithm>
 #include <cassert>
+#include <charconv>
 #include <cstring>
+#include <tuple>
+
+#include <fmt/format.h>
 
 namespace relief::parallel {
 
 namespace {
-
-// Rows [first, last) of band `band` of `bands` over `height` rows.
-std::pair<int, int> band_rows(int band, int bands, int height) {
-  return {height * band / bands, height * (band + 1) / bands};
-}
 
 // Messages of sizes the receivers do not know: every size first, then the
 // bytes. out[i] goes to rank to[i]; the result holds one message per from[i].
@@ -114,96 +113,154 @@ void keep_nearer(Layer& into, const Layer& from) {
   }
 }
 
-namespace {
-
-bool power_of_two(int n) {
-  return n > 0 && (n & (n - 1)) == 0;
+Result<Compositing> parse_compositing(std::string_view text) {
+  Compositing how;
+  if (text == "binary-swap") {
+    how.method = Compositing::Method::binary_swap, how.k = 2;
+  } else if (text == "direct-send") {
+    how.method = Compositing::Method::direct_send, how.k = 0;
+  } else if (text == "radix-k") {
+    how.method = Compositing::Method::radix_k;
+  } else if (text.starts_with("radix-k:")) {
+    const std::string_view k = text.substr(8);
+    int value = 0;
+    const auto [end, error] = std::from_chars(k.data(), k.data() + k.size(), value);
+    if (error != std::errc() || end != k.data() + k.size() || value < 2 || value > 1024) {
+      return fail(fmt::format("--composite: '{}': K must be a whole number in 2..1024", text));
+    }
+    how.method = Compositing::Method::radix_k, how.k = value;
+  } else {
+    return fail(fmt::format(
+        "--composite: '{}' is not radix-k, radix-k:K, binary-swap or direct-send", text));
+  }
+  return how;
 }
 
-// Binary swap (power-of-two rank counts): in round r, ranks 2^r apart
-// split the rows they still hold; each keeps one half, sends the other and
-// composites what it receives. After log2 N rounds every rank holds 1/N of
-// the rows, composited over all ranks. Ranks pair as blocks of consecutive
-// ranks, lower block against higher, so the lowest rank still wins ties.
-Result<std::vector<uint8_t>> binary_swap(Comm& comm, const Layer& layer) {
-  const int n = comm.size(), me = comm.rank(), w = layer.width, h = layer.height;
-  // The rows each rank holds after the last round.
-  auto rows_of = [&](int rank) {
-    int lo = 0, hi = h;
-    for (int bit = 1; bit < n; bit <<= 1) {
-      const int mid = (lo + hi) / 2;
-      (rank & bit ? lo : hi) = mid;
-    }
-    return std::pair{lo, hi};
-  };
-  Layer held = layer;  // all rows at first; only [lo, hi) matter
-  int lo = 0, hi = h;
-  for (int bit = 1; bit < n; bit <<= 1) {
-    const int partner = me ^ bit, mid = (lo + hi) / 2;
-    const bool upper = me & bit;
-    const auto [keep0, keep1] = upper ? std::pair{mid, hi} : std::pair{lo, mid};
-    const auto [give0, give1] = upper ? std::pair{lo, mid} : std::pair{mid, hi};
-    const std::vector<std::byte> out = encode_rows(held, give0, give1);
-    auto in = RELIEF_TRY(
-        exchange_sized(comm, std::span(&partner, 1), std::span(&out, 1), std::span(&partner, 1)));
-    // The lower block's pixels win ties.
-    RELIEF_CHECK(merge_encoded(held, keep0, keep1, in[0], upper));
-    lo = keep0, hi = keep1;
+std::string to_string(const Compositing& how) {
+  switch (how.method) {
+    case Compositing::Method::binary_swap:
+      return "binary-swap";
+    case Compositing::Method::direct_send:
+      return "direct-send";
+    case Compositing::Method::radix_k:
+      break;
   }
+  return fmt::format("radix-k:{}", how.k);
+}
+
+std::vector<int> composite_rounds(const Compositing& how, int ranks) {
+  assert(ranks >= 1);
+  if (ranks == 1) return {};
+  if (how.method == Compositing::Method::direct_send) return {ranks};
+  const int k = how.method == Compositing::Method::binary_swap ? 2 : how.k;
+  std::vector<int> rounds;
+  for (int left = ranks; left > 1;) {
+    int factor = 0;
+    for (int f = std::min(k, left); f >= 2 && !factor; --f) {
+      if (left % f == 0) factor = f;
+    }
+    // No factor up to k: the smallest prime factor (all exceed k).
+    for (int f = k + 1; !factor; ++f) {
+      if (left % f == 0) factor = f;
+    }
+    rounds.push_back(factor);
+    left /= factor;
+  }
+  return rounds;
+}
+
+std::pair<int, int> RadixRound::piece(int member) const {
+  const int k = static_cast<int>(group.size());
+  return {lo + (hi - lo) * member / k, lo + (hi - lo) * (member + 1) / k};
+}
+
+// Ranks are numbers in the mixed radix of the rounds, the first round's
+// digit lowest: round i groups the ranks that differ only in digit i. Before
+// it, a rank holds the composite of the ranks that share its digits from i
+// on, a block of consecutive ranks, so the group's members hold consecutive
+// blocks in the order of that digit and the lowest rank still wins ties.
+std::vector<RadixRound> radix_schedule(int rank, std::span<const int> rounds, int height) {
+  std::vector<RadixRound> schedule;
+  int stride = 1, lo = 0, hi = height;
+  for (const int k : rounds) {
+    RadixRound round;
+    const int digit = rank / stride % k, base = rank - digit * stride;
+    for (int m = 0; m < k; ++m) round.group.push_back(base + m * stride);
+    round.position = digit;
+    round.lo = lo, round.hi = hi;
+    std::tie(lo, hi) = round.piece(digit);
+    schedule.push_back(std::move(round));
+    stride *= k;
+  }
+  return schedule;
+}
+
+std::pair<int, int> final_rows(int rank, std::span<const int> rounds, int height) {
+  const std::vector<RadixRound> schedule = radix_schedule(rank, rounds, height);
+  if (schedule.empty()) return {0, height};
+  return schedule.back().piece(schedule.back().position);
+}
+
+std::vector<std::vector<std::byte>> round_messages(const Layer& held, const RadixRound& round) {
+  std::vector<std::vector<std::byte>> out(round.group.size());
+  for (int m = 0; m < static_cast<int>(round.group.size()); ++m) {
+    if (m == round.position) continue;
+    const auto [r0, r1] = round.piece(m);
+    out[static_cast<size_t>(m)] = encode_rows(held, r0, r1);
+  }
+  return out;
+}
+
+Status merge_round(Layer& held, const RadixRound& round,
+                   std::span<const std::vector<std::byte>> in) {
+  assert(in.size() == round.group.size());
+  const auto [r0, r1] = round.piece(round.position);
+  const int me = round.position, k = static_cast<int>(round.group.size());
+  // Ours first, then the higher blocks (which win only when nearer), then
+  // the lower ones from the nearest block down (each wins ties over
+  // everything merged so far): the nearest, the lowest block's on a tie.
+  for (int m = me + 1; m < k; ++m) {
+    RELIEF_CHECK(merge_encoded(held, r0, r1, in[static_cast<size_t>(m)], false));
+  }
+  for (int m = me - 1; m >= 0; --m) {
+    RELIEF_CHECK(merge_encoded(held, r0, r1, in[static_cast<size_t>(m)], true));
+  }
+  return {};
+}
+
+Result<std::vector<uint8_t>> depth_composite(Comm& comm, const Layer& layer,
+                                             const Compositing& how) {
+  const int n = comm.size(), w = layer.width, h = layer.height;
+  const std::vector<int> rounds = composite_rounds(how, n);
+  Layer held = layer;  // all rows at first; only the rows of the current round matter
+  for (const RadixRound& round : radix_schedule(comm.rank(), rounds, h)) {
+    std::vector<std::vector<std::byte>> out = round_messages(held, round);
+    std::vector<int> others;
+    std::vector<std::vector<std::byte>> sent;
+    for (size_t m = 0; m < round.group.size(); ++m) {
+      if (static_cast<int>(m) == round.position) continue;
+      others.push_back(round.group[m]);
+      sent.push_back(std::move(out[m]));
+    }
+    auto received = RELIEF_TRY(exchange_sized(comm, others, sent, others));
+    std::vector<std::vector<std::byte>> in(round.group.size());
+    for (size_t m = 0, i = 0; m < round.group.size(); ++m) {
+      if (static_cast<int>(m) != round.position) in[m] = std::move(received[i++]);
+    }
+    RELIEF_CHECK(merge_round(held, round, in));
+  }
+  // Rank 0 gathers the rows' colour.
   std::vector<lod::PixelRect> bands;
   for (int k = 0; k < n; ++k) {
-    const auto [k0, k1] = rows_of(k);
+    const auto [k0, k1] = final_rows(k, rounds, h);
     bands.push_back({0, k0, w, k1 - k0});
   }
+  const auto [lo, hi] = final_rows(comm.rank(), rounds, h);
   const size_t first = static_cast<size_t>(lo) * static_cast<size_t>(w) * 4;
   return gather_tiles(
       comm,
       std::span<const uint8_t>(held.rgba.data() + first,
                                static_cast<size_t>(hi - lo) * static_cast<size_t>(w) * 4),
-      bands, w, h);
-}
-
-}  // namespace
-
-const char* compositing_method(int ranks) {
-  return power_of_two(ranks) ? "binary-swap" : "direct-send";
-}
-
-Result<std::vector<uint8_t>> depth_composite(Comm& comm, const Layer& layer) {
-  if (power_of_two(comm.size())) return binary_swap(comm, layer);
-  const int n = comm.size(), me = comm.rank(), w = layer.width, h = layer.height;
-  // Send every other rank its band; receive our band from every other rank.
-  std::vector<int> others;
-  std::vector<std::vector<std::byte>> out;
-  for (int k = 0; k < n; ++k) {
-    if (k == me) continue;
-    const auto [k0, k1] = band_rows(k, n, h);
-    others.push_back(k);
-    out.push_back(encode_rows(layer, k0, k1));
-  }
-  const auto in = RELIEF_TRY(exchange_sized(comm, others, out, others));
-  // Our band: the nearest fragment, the lowest rank's on a tie. Ours first,
-  // then the higher ranks (which win only when nearer), then the lower ones
-  // from the nearest rank down (each wins ties over everything merged so far).
-  const auto [r0, r1] = band_rows(me, n, h);
-  Layer band = layer;  // rows [r0, r1) matter
-  for (size_t i = 0; i < others.size(); ++i) {
-    if (others[i] > me) RELIEF_CHECK(merge_encoded(band, r0, r1, in[i], false));
-  }
-  for (size_t i = others.size(); i-- > 0;) {
-    if (others[i] < me) RELIEF_CHECK(merge_encoded(band, r0, r1, in[i], true));
-  }
-  // Rank 0 gathers the bands' colour.
-  std::vector<lod::PixelRect> bands;
-  for (int k = 0; k < n; ++k) {
-    const auto [k0, k1] = band_rows(k, n, h);
-    bands.push_back({0, k0, w, k1 - k0});
-  }
-  const size_t first = static_cast<size_t>(r0) * static_cast<size_t>(w) * 4;
-  return gather_tiles(
-      comm,
-      std::span<const uint8_t>(band.rgba.data() + first,
-                               static_cast<size_t>(r1 - r0) * static_cast<size_t>(w) * 4),
       bands, w, h);
 }
 
