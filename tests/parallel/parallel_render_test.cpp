@@ -286,6 +286,21 @@ TEST(Parallel, ARankThatDiesFailsTheRun) {
   EXPECT_FALSE(fs::exists(dir / "out.png"));
 }
 
+// libmpi loads with --parallel only (the MPI module), not with every
+// command: the dynamic loader's own log of the files it loads says so.
+TEST(Parallel, OnlyTheParallelPathLoadsMpi) {
+  ScratchDir dir("parallel_loads");
+  auto info = run_relief({"info", Stores::pyrenees().string()}, "LD_DEBUG=files");
+  ASSERT_EQ(info.exit_code, 0) << info.err;
+  EXPECT_NE(info.err.find("libc.so"), std::string::npos);  // the log is there
+  EXPECT_EQ(info.err.find("libmpi"), std::string::npos);
+  std::vector<std::string> a = render_args(dir / "out.png");
+  a.insert(a.end(), {"--parallel", "sort-last:active"});
+  auto render = run_relief(a, kNoMesaLeakReport + "LD_DEBUG=files ");
+  ASSERT_EQ(render.exit_code, 0) << render.err;
+  EXPECT_NE(render.err.find("libmpi"), std::string::npos);
+}
+
 TEST(Parallel, BadModesAreOneLineErrors) {
   ScratchDir dir("parallel_bad");
   std::vector<std::string> a = render_args(dir / "out.png");

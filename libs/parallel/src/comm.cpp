@@ -1,132 +1,89 @@
 #include "relief/parallel/comm.h"
 
-#include <mpi.h>
+#include <dlfcn.h>
 
-#include <chrono>
-#include <climits>
-#include <thread>
+#include <cstdlib>
+#include <filesystem>
 
 #include <fmt/format.h>
+
+#include "transport.h"
 
 namespace relief::parallel {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
+namespace fs = std::filesystem;
 
-std::string mpi_error(int code) {
-  char text[MPI_MAX_ERROR_STRING];
-  int length = 0;
-  MPI_Error_string(code, text, &length);
-  return std::string(text, static_cast<size_t>(length));
+// Where the MPI module may be: $RELIEF_PARALLEL_MODULE, then beside an
+// installed program (bin/../lib/relief/), then the build tree.
+std::vector<fs::path> module_candidates() {
+  std::vector<fs::path> paths;
+  if (const char* env = std::getenv("RELIEF_PARALLEL_MODULE"); env && *env) {
+    paths.emplace_back(env);
+  }
+  std::error_code ec;
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+  if (!ec) {
+    paths.push_back(exe.parent_path().parent_path() / RELIEF_PARALLEL_MODULE_INSTALL_SUBDIR /
+                    RELIEF_PARALLEL_MODULE_NAME);
+  }
+  paths.emplace_back(RELIEF_PARALLEL_MODULE_BUILD_PATH);
+  return paths;
 }
 
-// Polls `requests` until all are done or the deadline passes; on a timeout,
-// `pending(i)` names what request i was waiting for.
-template <class Name>
-Status wait_all(std::vector<MPI_Request>& requests, double timeout, int rank, Name pending) {
-  const auto deadline = Clock::now() + std::chrono::duration<double>(timeout);
-  for (int polls = 0;; ++polls) {
-    bool all = true;
-    for (MPI_Request& r : requests) {
-      if (r == MPI_REQUEST_NULL) continue;
-      int done = 0;
-      if (int e = MPI_Test(&r, &done, MPI_STATUS_IGNORE); e != MPI_SUCCESS) {
-        return fail(fmt::format("rank {}: MPI: {}", rank, mpi_error(e)));
-      }
-      all = all && done;
+// The MPI module (transport.h says why it is one). Loaded once per process,
+// as MPI initialises once; kept for the process's life.
+Result<OpenTransport> load_transport() {
+  std::string tried;
+  for (const fs::path& path : module_candidates()) {
+    std::error_code ec;
+    if (!fs::exists(path, ec)) {
+      tried += (tried.empty() ? "" : ", ") + path.string();
+      continue;
     }
-    if (all) return {};
-    if (Clock::now() > deadline) {
-      for (size_t i = 0; i < requests.size(); ++i) {
-        if (requests[i] != MPI_REQUEST_NULL) {
-          return fail(
-              fmt::format("rank {}: {} within {} s (it died or hangs)", rank, pending(i), timeout));
-        }
-      }
-    }
-    // Waiting for peers that render: poll, but do not spin.
-    if (polls > 100) std::this_thread::sleep_for(std::chrono::microseconds(500));
+    // Global: OpenMPI's own plugins (dlopened by libopen-pal) may resolve
+    // symbols of libmpi, which this module brings in.
+    void* module = dlopen(path.c_str(), RTLD_NOW | RTLD_GLOBAL);
+    if (!module) return fail(fmt::format("parallel: cannot load {}: {}", path.string(), dlerror()));
+    auto open = reinterpret_cast<OpenTransport>(dlsym(module, kOpenTransportSymbol));
+    if (!open)
+      return fail(fmt::format("parallel: {} has no {}", path.string(), kOpenTransportSymbol));
+    return open;
   }
-}
-
-Status check_size(size_t bytes) {
-  if (bytes > static_cast<size_t>(INT_MAX)) {
-    return fail(fmt::format("a message of {} bytes is larger than MPI's {} bytes", bytes, INT_MAX));
-  }
-  return {};
+  return fail("parallel: the MPI module is not installed (looked for " + tried + ")");
 }
 
 }  // namespace
 
 Result<std::unique_ptr<Comm>> Comm::init(double timeout_seconds) {
-  int initialised = 0;
-  MPI_Initialized(&initialised);
-  if (!initialised && MPI_Init(nullptr, nullptr) != MPI_SUCCESS) {
-    return fail("MPI: cannot initialise (is this run under mpirun?)");
-  }
-  // Errors come back as values: a dead peer is reported, not fatal.
-  MPI_Comm_set_errhandler(MPI_COMM_WORLD, MPI_ERRORS_RETURN);
-  int rank = 0, size = 1;
-  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
-  MPI_Comm_size(MPI_COMM_WORLD, &size);
-  return std::unique_ptr<Comm>(new Comm(rank, size, timeout_seconds));
+  const OpenTransport open = RELIEF_TRY(load_transport());
+  std::unique_ptr<Transport> transport = RELIEF_TRY(open());
+  return std::unique_ptr<Comm>(new Comm(std::move(transport), timeout_seconds));
 }
 
-Comm::~Comm() {
-  int finalised = 0;
-  MPI_Finalized(&finalised);
-  if (!finalised) MPI_Finalize();
-}
+Comm::Comm(std::unique_ptr<Transport> transport, double timeout)
+    : transport_(std::move(transport)),
+      rank_(transport_->rank()),
+      size_(transport_->size()),
+      timeout_(timeout) {}
+
+Comm::~Comm() = default;  // the transport finalises MPI
 
 Status Comm::broadcast(std::span<std::byte> bytes, int root) {
-  RELIEF_CHECK(check_size(bytes.size()));
-  std::vector<MPI_Request> request(1);
-  if (int e = MPI_Ibcast(bytes.data(), static_cast<int>(bytes.size()), MPI_BYTE, root,
-                         MPI_COMM_WORLD, &request[0]);
-      e != MPI_SUCCESS) {
-    return fail(fmt::format("rank {}: MPI broadcast: {}", rank_, mpi_error(e)));
-  }
   if (rank_ == root) bytes_sent_ += bytes.size() * static_cast<uint64_t>(size_ - 1);
-  return wait_all(request, timeout_, rank_, [&](size_t) {
-    return rank_ == root ? std::string("a rank did not receive the broadcast")
-                         : fmt::format("nothing from rank {}", root);
-  });
+  return transport_->broadcast(bytes, root, timeout_);
 }
 
 Status Comm::exchange(std::span<const Send> sends, std::span<const Receive> receives) {
   const int tag = tag_++ % 30000;
-  std::vector<MPI_Request> requests(receives.size() + sends.size(), MPI_REQUEST_NULL);
-  for (size_t i = 0; i < receives.size(); ++i) {
-    const Receive& r = receives[i];
-    RELIEF_CHECK(check_size(r.bytes.size()));
-    if (int e = MPI_Irecv(r.bytes.data(), static_cast<int>(r.bytes.size()), MPI_BYTE, r.from, tag,
-                          MPI_COMM_WORLD, &requests[i]);
-        e != MPI_SUCCESS) {
-      return fail(
-          fmt::format("rank {}: MPI receive from rank {}: {}", rank_, r.from, mpi_error(e)));
-    }
-  }
-  for (size_t i = 0; i < sends.size(); ++i) {
-    const Send& s = sends[i];
-    RELIEF_CHECK(check_size(s.bytes.size()));
-    // MPI's send buffer is const since MPI 3.
-    if (int e = MPI_Isend(s.bytes.data(), static_cast<int>(s.bytes.size()), MPI_BYTE, s.to, tag,
-                          MPI_COMM_WORLD, &requests[receives.size() + i]);
-        e != MPI_SUCCESS) {
-      return fail(fmt::format("rank {}: MPI send to rank {}: {}", rank_, s.to, mpi_error(e)));
-    }
-    bytes_sent_ += s.bytes.size();
-  }
-  return wait_all(requests, timeout_, rank_, [&](size_t i) {
-    return i < receives.size() ? fmt::format("nothing from rank {}", receives[i].from)
-                               : fmt::format("rank {} took nothing", sends[i - receives.size()].to);
-  });
+  for (const Send& s : sends) bytes_sent_ += s.bytes.size();
+  return transport_->exchange(sends, receives, tag, timeout_);
 }
 
 void Comm::abort(int code) {
-  MPI_Abort(MPI_COMM_WORLD, code);
-  std::_Exit(code);  // MPI_Abort does not return; in case it does
+  transport_->abort(code);
+  std::_Exit(code);  // the transport does not return; the compiler cannot know
 }
 
 }  // namespace relief::parallel

@@ -4,6 +4,8 @@
 // nonblocking underneath and polled against a deadline: a rank that died or
 // hangs makes the operation fail with a message naming it, within the
 // timeout, instead of blocking forever (MPI's errors are returned, not fatal).
+// MPI itself is in a module loaded by init(), so a program that links this
+// library loads libmpi only when it makes a Comm.
 //
 // One Comm per process, used from one thread.
 #include <cstddef>
@@ -17,12 +19,15 @@
 
 namespace relief::parallel {
 
+class Transport;  // src/transport.h
+
 class Comm {
  public:
-  // Initialises MPI (a process started without mpirun is one rank of one).
+  // Loads the MPI module and initialises MPI (a process started without
+  // mpirun is one rank of one).
   // Operations fail when a peer has not answered within `timeout_seconds`.
   static Result<std::unique_ptr<Comm>> init(double timeout_seconds);
-  ~Comm();  // finalises MPI
+  ~Comm();  // finalises MPI (MPI cannot be initialised again in this process)
   Comm(const Comm&) = delete;
   Comm& operator=(const Comm&) = delete;
 
@@ -53,7 +58,8 @@ class Comm {
   [[noreturn]] void abort(int code);
 
  private:
-  Comm(int rank, int size, double timeout) : rank_(rank), size_(size), timeout_(timeout) {}
+  Comm(std::unique_ptr<Transport> transport, double timeout);
+  std::unique_ptr<Transport> transport_;  // MPI, behind the module's interface
   int rank_ = 0, size_ = 1;
   double timeout_ = 60;
   int tag_ = 0;
