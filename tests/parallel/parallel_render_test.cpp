@@ -275,6 +275,36 @@ TEST(Parallel, ARankThatHangsFailsTheRunWithinTheTimeout) {
   EXPECT_FALSE(fs::exists(dir / "out.png"));
 }
 
+// The same during sort-last's compressed compositing: 3 ranks of radix-k
+// (one round of 3) all wait for rank 2 directly; with binary swap on 4 ranks
+// the ranks that finished the first round wait in the second for a rank that
+// waits for the hung one, and the run still ends within the timeout.
+TEST(Parallel, ARankThatHangsDuringRadixKFailsTheRunWithinTheTimeout) {
+  ScratchDir dir("parallel_hang_radix");
+  std::vector<std::string> a = render_args(dir / "out.png");
+  a.insert(a.end(), {"--parallel", "sort-last:active", "--parallel-timeout", "3"});
+  auto r = run_relief(a, mpirun(3, "RELIEF_PARALLEL_FAULT=hang:2"));
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("nothing from rank 2 within 3 s (it died or hangs)"), std::string::npos)
+      << r.err;
+  a.insert(a.end(), {"--composite", "binary-swap"});
+  auto swap = run_relief(a, mpirun(4, "RELIEF_PARALLEL_FAULT=hang:3"));
+  EXPECT_NE(swap.exit_code, 0);
+  EXPECT_NE(swap.err.find("within 3 s (it died or hangs)"), std::string::npos) << swap.err;
+  EXPECT_FALSE(fs::exists(dir / "out.png"));
+}
+
+TEST(Parallel, ARankThatDiesDuringRadixKFailsTheRun) {
+  ScratchDir dir("parallel_kill_radix");
+  std::vector<std::string> a = render_args(dir / "out.png");
+  a.insert(a.end(), {"--parallel", "sort-last:active", "--composite", "binary-swap",
+                     "--parallel-timeout", "3"});
+  auto r = run_relief(a, mpirun(4, "RELIEF_PARALLEL_FAULT=kill:3"));
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("rank 3"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "out.png"));
+}
+
 TEST(Parallel, ARankThatDiesFailsTheRun) {
   ScratchDir dir("parallel_kill");
   std::vector<std::string> a = render_args(dir / "out.png");
@@ -322,6 +352,14 @@ TEST(Parallel, BadModesAreOneLineErrors) {
   EXPECT_TRUE(is_one_line_error(with({"--parallel", "sort-first:h", "--composite", "radix-k"}),
                                 "--composite: only with --parallel sort-last"));
   EXPECT_TRUE(is_one_line_error(with({"--composite", "radix-k"}), "--composite"));
+  // A module that is not one (RELIEF_PARALLEL_MODULE names it): a one-line error.
+  const fs::path bogus = dir / "not-a-module.so";
+  std::ofstream(bogus) << "not ELF";
+  std::vector<std::string> b = a;
+  b.insert(b.end(), {"--parallel", "sort-last:active"});
+  EXPECT_TRUE(is_one_line_error(
+      run_relief(b, kNoMesaLeakReport + "RELIEF_PARALLEL_MODULE=" + bogus.string() + " "),
+      "parallel: cannot load " + bogus.string()));
   EXPECT_FALSE(fs::exists(dir / "out.png"));
 }
 
