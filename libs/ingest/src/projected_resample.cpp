@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 #include <fmt/format.h>
@@ -21,7 +22,7 @@ struct Window {
   bool get(int x, int y, double& v) const {
     if (x < x0 || y < y0 || x >= x0 + w || y >= y0 + h) return false;
     v = values[static_cast<size_t>(y - y0) * static_cast<size_t>(w) + static_cast<size_t>(x - x0)];
-    return !std::isnan(v) && !(has_nodata && v == nodata);
+    return !std::isnan(v);  // nodata was made NaN when read
   }
 };
 
@@ -50,9 +51,9 @@ bool bilinear4(const Window& win, double sx, double sy, double& out) {
   return true;
 }
 
+// GDAL's GWKBilinear (1 - |x| up to 1, else 0), without a branch to mispredict.
 double triangle(double x) {
-  const double a = std::fabs(x);
-  return a <= 1.0 ? 1 - a : 0.0;
+  return std::max(0.0, 1.0 - std::fabs(x));
 }
 
 // GDAL's GWKResample with its bilinear filter at scale < 1: a (2 r + 1)^2
@@ -92,7 +93,7 @@ bool bilinear_wide(const Window& win, bool finite, int width, int height, double
     double row = 0, row_weight = 0;
     for (int i = i_lo; i <= i_hi; ++i) {
       const double v = row_values[i];
-      if (std::isnan(v) || (win.has_nodata && v == win.nodata)) continue;
+      if (std::isnan(v)) continue;  // nodata was made NaN
       const double w2 = weights_x[i - i_min];
       row += v * w2;
       row_weight += w2;
@@ -206,8 +207,13 @@ Status ProjectedResampler::resample(const geo::TileGrid& grid, const geo::TileKe
     return fail(fmt::format("tile {}: {}", key.to_string(), gdal_error("source read failed")));
   }
   win.values.swap(buffer);
-  const bool finite =
-      std::none_of(win.values.begin(), win.values.end(), [](double v) { return std::isinf(v); });
+  // One pass over the window: nodata becomes NaN (one test per tap), and
+  // whether any value is infinite.
+  bool finite = true;
+  for (double& v : win.values) {
+    if (win.has_nodata && v == win.nodata) v = std::numeric_limits<double>::quiet_NaN();
+    finite = finite && !std::isinf(v);
+  }
   auto out = tile.f32();
   for (size_t k = 0; k < n; ++k) {
     if (!ok[k]) continue;
