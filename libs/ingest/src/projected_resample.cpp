@@ -140,8 +140,8 @@ std::optional<ProjectedResampler> ProjectedResampler::create(GDALDatasetH ds,
   return r;
 }
 
-Status ProjectedResampler::resample(const geo::TileGrid& grid, const geo::TileKey& key,
-                                    double scale, tiles::Raster& tile) {
+Result<bool> ProjectedResampler::resample(const geo::TileGrid& grid, const geo::TileKey& key,
+                                          double scale, tiles::Raster& tile) {
   const int w = grid.width(), h = grid.height();
   const geo::GeoBox b = key.bounds();
   const double d = grid.sample_spacing(key.level);
@@ -181,11 +181,10 @@ Status ProjectedResampler::resample(const geo::TileGrid& grid, const geo::TileKe
       max_y = std::max(max_y, y[i]);
     }
   }
-  if (!(min_x <= max_x)) return {};  // nothing lands anywhere
+  if (!(min_x <= max_x)) return true;  // nothing lands anywhere
   const bool four = scale >= 0.95;
   const int radius = four ? 1 : static_cast<int>(std::ceil(1.0 / scale));
-  if (radius > 31)
-    return fail(fmt::format("tile {}: resampling scale {} too small", key.to_string(), scale));
+  if (radius > 31) return false;  // beyond the weight buffers: GDAL's warper
   // Every sample any kernel reaches, clipped to the raster.
   auto clip = [](double v, int size) {
     return static_cast<int>(std::clamp(v, -1.0, static_cast<double>(size)));
@@ -195,9 +194,10 @@ Status ProjectedResampler::resample(const geo::TileGrid& grid, const geo::TileKe
   win.y0 = std::max(0, clip(std::floor(min_y - 0.5), height_) - radius);
   const int x1 = std::min(width_ - 1, clip(std::floor(max_x - 0.5), width_) + radius + 1);
   const int y1 = std::min(height_ - 1, clip(std::floor(max_y - 0.5), height_) + radius + 1);
-  if (win.x0 > x1 || win.y0 > y1) return {};
+  if (win.x0 > x1 || win.y0 > y1) return true;
   win.w = x1 - win.x0 + 1;
   win.h = y1 - win.y0 + 1;
+  if (int64_t{win.w} * win.h > kMaxWindowSamples) return false;
   win.has_nodata = has_nodata_;
   win.nodata = nodata_;
   thread_local std::vector<double> buffer;  // reused: no fresh pages per tile
@@ -228,7 +228,7 @@ Status ProjectedResampler::resample(const geo::TileGrid& grid, const geo::TileKe
     if (valid) out[k] = static_cast<float>(v);
   }
   win.values.swap(buffer);
-  return {};
+  return true;
 }
 
 }  // namespace relief::ingest

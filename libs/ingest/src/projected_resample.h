@@ -14,6 +14,7 @@
 // of the triangle function stretched by 1 / scale), with GDAL's handling of
 // invalid samples and edges. Results equal GDAL's warper's to a bit or two
 // (coordinates are taken relative to the raster, not to GDAL's window).
+#include <cstdint>
 #include <memory>
 #include <optional>
 
@@ -33,9 +34,12 @@ class ProjectedResampler {
 
   // Paints the valid bilinear samples of the source over `tile` (the interior
   // of `key`), leaving the others untouched, as GDAL mosaics sources. scale:
-  // GDAL's XSCALE = YSCALE (1 when upsampling).
-  Status resample(const geo::TileGrid& grid, const geo::TileKey& key, double scale,
-                  tiles::Raster& tile);
+  // GDAL's XSCALE = YSCALE (1 when upsampling). False, with `tile` untouched,
+  // when the tile needs more source than kMaxWindowSamples (a tile far
+  // coarser than the source, where GDAL's warper works in chunks instead).
+  Result<bool> resample(const geo::TileGrid& grid, const geo::TileKey& key, double scale,
+                        tiles::Raster& tile);
+  static constexpr int64_t kMaxWindowSamples = int64_t{1} << 20;  // 8 MiB of doubles
 
  private:
   struct TransformerDeleter {

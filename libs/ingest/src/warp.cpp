@@ -183,8 +183,12 @@ Result<tiles::Raster> TileWarper::warp(const geo::TileKey& key) {
       std::all_of(hits.begin(), hits.end(), [&](size_t g) { return projected_for(g); })) {
     tiles::Raster r = tiles::Raster::empty(tiles::SampleType::Float32, w, h);
     const double scale = scale_for(key, hits);
-    for (size_t g : hits) RELIEF_CHECK(projected_for(g)->resample(grid_, key, scale, r));
-    return r;
+    bool handled = true;
+    for (size_t g : hits) {
+      handled = RELIEF_TRY(projected_for(g)->resample(grid_, key, scale, r));
+      if (!handled) break;  // the whole tile goes to GDAL's warper
+    }
+    if (handled) return r;
   }
 
   std::vector<GDALDatasetH> handles;
