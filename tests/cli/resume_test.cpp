@@ -150,6 +150,38 @@ TEST(Resume, KilledAfterTheManifestIsFinishedByTheRerun) {
   EXPECT_NE(run_relief(build_args(out.string())).exit_code, 0);
 }
 
+// Stopped after the scratch is removed (before the sync that makes the tiles
+// durable, so the sync does not write it) and before the manifest: only the
+// state file is left in .build/. The re-run computes the interiors again and
+// finishes the same store.
+TEST(Resume, KilledAfterTheScratchIsRemovedResumesToTheSameStore) {
+  ScratchDir dir("resume_after_scratch");
+  const fs::path out = dir / "killed";
+  const int pid = spawn_relief(build_args(out.string()));
+  ASSERT_GT(pid, 0);
+  ASSERT_TRUE(kill_when(pid, [&] { return count_files(out / ".build/cores/11") >= 2; }));
+  const std::string state = *read_text_file(out / ".build/state.json");
+  ASSERT_EQ(run_relief(build_args(out.string())).exit_code, 0);
+  const auto expected = store_files(out);
+  // The kill point: every tile and level index written, the scratch gone.
+  fs::remove(out / "manifest.json");
+  fs::create_directories(out / ".build");
+  std::ofstream(out / ".build/state.json") << state;
+  EXPECT_NE(run_relief({"verify", out.string(), "-q"}).exit_code, 0);
+
+  auto rerun = run_relief(build_args(out.string()));
+  ASSERT_EQ(rerun.exit_code, 0) << rerun.err;
+  EXPECT_FALSE(fs::exists(out / ".build"));
+  EXPECT_EQ(run_relief({"verify", out.string(), "-q"}).exit_code, 0);
+  const auto got = store_files(out);
+  ASSERT_EQ(got.size(), expected.size());
+  for (const auto& [name, bytes] : expected) {
+    auto it = got.find(name);
+    ASSERT_NE(it, got.end()) << name;
+    EXPECT_TRUE(it->second == bytes) << name;
+  }
+}
+
 TEST(Resume, InterruptedBuildWithOtherParametersIsRefused) {
   ScratchDir dir("resume_params");
   const fs::path out = dir / "s";

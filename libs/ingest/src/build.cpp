@@ -135,6 +135,21 @@ Status remove_temporary_files(const fs::path& root) {
   return {};
 }
 
+// Empties the build directory but for its state file, which marks the
+// directory as an interrupted build of these parameters.
+Status remove_scratch(const fs::path& out) {
+  std::error_code ec;
+  std::vector<fs::path> scratch;
+  for (const auto& entry : fs::directory_iterator(out / kBuildDir, ec)) {
+    if (entry.path().filename() != kStateName) scratch.push_back(entry.path());
+  }
+  for (const auto& p : scratch) {
+    fs::remove_all(p, ec);
+    if (ec) return fail(fmt::format("{}: cannot remove: {}", p.string(), ec.message()));
+  }
+  return {};
+}
+
 bool is_store_like(const fs::path& dir) {
   std::error_code ec;
   return fs::exists(dir / tiles::kManifestName, ec) || fs::exists(dir / kBuildDir / kStateName, ec);
@@ -346,6 +361,11 @@ class Builder {
       lap("errors");
     }
     for (const auto& index : indices) RELIEF_CHECK(tiles::write_level_index(o_.output, index));
+    // Every tile is written: the scratch goes before the sync, so its dirty
+    // pages (about as many bytes as the store) are dropped instead of written
+    // to disk. A build stopped from here on resumes by computing the
+    // interiors again and keeps the tiles already written.
+    RELIEF_CHECK(remove_scratch(o_.output));
     // Tiles are renamed into place without fsync (atomic against a crash of the
     // process); one syncfs makes them all durable before the manifest declares
     // the store complete, so a power cut cannot leave a manifest over lost tiles.

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <mutex>
 #include <vector>
 
@@ -99,31 +100,56 @@ Status DirectResampler::resample(const geo::TileGrid& grid, const geo::TileKey& 
       return fail(fmt::format("tile {}: {}", key.to_string(), gdal_error("source read failed")));
     }
   }
-  // Valid and inside the raster; outside the window means outside the raster.
-  auto sample = [&](int x, int y, double& v) {
-    if (x < x0 || x > x1 || y < y0 || y > y1) return false;
-    v = src[static_cast<size_t>(y - y0) * static_cast<size_t>(ww) + static_cast<size_t>(x - x0)];
-    return !std::isnan(v) && !(has_nodata_ && v == nodata_);
+  // Validity of every window sample, once: a tap then costs one load.
+  thread_local std::vector<uint8_t> valid;
+  valid.resize(src.size());
+  for (size_t k = 0; k < src.size(); ++k) {
+    valid[k] = !std::isnan(src[k]) && !(has_nodata_ && src[k] == nodata_);
+  }
+  // Column offsets into a window row, -1 outside the window (= outside the raster).
+  auto offset = [](int v, int lo, int hi) { return v < lo || v > hi ? -1 : v - lo; };
+  struct ColumnTaps {
+    int pixel, left, right;
   };
+  thread_local std::vector<ColumnTaps> col_taps;
+  col_taps.resize(static_cast<size_t>(w));
+  for (int i = 0; i < w; ++i) {
+    const Tap& t = cols[static_cast<size_t>(i)];
+    col_taps[static_cast<size_t>(i)] = {offset(t.pixel, x0, x1), offset(t.index, x0, x1),
+                                        offset(t.index + 1, x0, x1)};
+  }
+  const size_t stride = static_cast<size_t>(ww);
   auto out = tile.f32();
   for (int j = 0; j < h; ++j) {
-    const Tap ty = rows[j];
+    const Tap ty = rows[static_cast<size_t>(j)];
     if (!ty.inside) continue;
+    const int own_row = offset(ty.pixel, y0, y1);
+    if (own_row < 0) continue;
+    const int upper = offset(ty.index, y0, y1), lower = offset(ty.index + 1, y0, y1);
+    const uint8_t* valid_own = valid.data() + static_cast<size_t>(own_row) * stride;
+    // Rows outside the window have no valid samples: point them at nothing.
+    const size_t up = upper < 0 ? 0 : static_cast<size_t>(upper) * stride;
+    const size_t low = lower < 0 ? 0 : static_cast<size_t>(lower) * stride;
+    float* out_row = out.data() + static_cast<size_t>(j) * static_cast<size_t>(w);
     for (int i = 0; i < w; ++i) {
-      const Tap tx = cols[i];
-      if (!tx.inside) continue;
+      const Tap& tx = cols[static_cast<size_t>(i)];
+      const ColumnTaps c = col_taps[static_cast<size_t>(i)];
+      if (!tx.inside || c.pixel < 0 || !valid_own[c.pixel]) continue;
+      auto tap = [&](int row_ok, size_t row, int col, double& v) {
+        if (row_ok < 0 || col < 0 || !valid[row + static_cast<size_t>(col)]) return false;
+        v = src[row + static_cast<size_t>(col)];
+        return true;
+      };
       double divisor = 0, sum = 0, v = 0;
-      if (!sample(tx.pixel, ty.pixel, v)) continue;
       // Same order of accumulation as GDAL: upper left, upper right, lower left, lower right.
       const double m_ul = tx.ratio * ty.ratio, m_ur = (1.0 - tx.ratio) * ty.ratio;
       const double m_ll = tx.ratio * (1.0 - ty.ratio), m_lr = (1.0 - tx.ratio) * (1.0 - ty.ratio);
-      if (sample(tx.index, ty.index, v)) divisor += m_ul, sum += v * m_ul;
-      if (sample(tx.index + 1, ty.index, v)) divisor += m_ur, sum += v * m_ur;
-      if (sample(tx.index, ty.index + 1, v)) divisor += m_ll, sum += v * m_ll;
-      if (sample(tx.index + 1, ty.index + 1, v)) divisor += m_lr, sum += v * m_lr;
+      if (tap(upper, up, c.left, v)) divisor += m_ul, sum += v * m_ul;
+      if (tap(upper, up, c.right, v)) divisor += m_ur, sum += v * m_ur;
+      if (tap(lower, low, c.left, v)) divisor += m_ll, sum += v * m_ll;
+      if (tap(lower, low, c.right, v)) divisor += m_lr, sum += v * m_lr;
       if (divisor < 0.00001) continue;
-      out[static_cast<size_t>(j) * static_cast<size_t>(w) + static_cast<size_t>(i)] =
-          static_cast<float>(divisor == 1.0 ? sum : sum / divisor);
+      out_row[i] = static_cast<float>(divisor == 1.0 ? sum : sum / divisor);
     }
   }
   return {};

@@ -66,7 +66,32 @@ TileWarper::TileWarper(const std::vector<Source>& sources, const std::vector<Mos
       direct_(direct && kind != tiles::DatasetKind::Imagery),
       shared_(shared),
       open_(groups.size()),
-      direct_resamplers_(groups.size()) {}
+      direct_resamplers_(groups.size()),
+      projected_(groups.size()) {}
+
+ProjectedResampler* TileWarper::projected_for(size_t g) {
+  if (!direct_) return nullptr;
+  auto& slot = projected_[g];
+  if (!slot) {
+    // A group reaching past the antimeridian is left to GDAL's warper, which
+    // handles the wrap; so is one GDAL cannot open.
+    const geo::GeoBox& b = groups_[g].box;
+    auto handle = group_handle(g);
+    slot = handle && b.west >= -180.0 && b.east <= 180.0
+               ? ProjectedResampler::create(*handle, error_threshold_)
+               : std::optional<ProjectedResampler>();
+  }
+  return *slot ? &**slot : nullptr;
+}
+
+double TileWarper::scale_for(const geo::TileKey& key, const std::vector<size_t>& groups) const {
+  double source_spacing = INFINITY;
+  for (size_t g : groups) {
+    for (size_t m : groups_[g].members)
+      source_spacing = std::min(source_spacing, sources_[m].spacing_deg);
+  }
+  return std::min(1.0, source_spacing / grid_.sample_spacing(key.level));
+}
 
 const DirectResampler* TileWarper::direct_for(size_t g, int level) {
   if (!direct_) return nullptr;
@@ -154,6 +179,17 @@ Result<tiles::Raster> TileWarper::warp(const geo::TileKey& key) {
   if (std::all_of(hits.begin(), hits.end(), [&](size_t g) { return direct_for(g, key.level); })) {
     return warp_direct(key, hits);
   }
+  if (!imagery &&
+      std::all_of(hits.begin(), hits.end(), [&](size_t g) { return projected_for(g); })) {
+    tiles::Raster r = tiles::Raster::empty(tiles::SampleType::Float32, w, h);
+    const double scale = scale_for(key, hits);
+    bool handled = true;
+    for (size_t g : hits) {
+      handled = RELIEF_TRY(projected_for(g)->resample(grid_, key, scale, r));
+      if (!handled) break;  // the whole tile goes to GDAL's warper
+    }
+    if (handled) return r;
+  }
 
   std::vector<GDALDatasetH> handles;
   for (size_t g : hits) {
@@ -192,12 +228,7 @@ Result<tiles::Raster> TileWarper::warp(const geo::TileKey& key) {
   // would make neighbouring tiles interpolate differently. Fix it from the
   // resolutions instead: plain 2 x 2 bilinear (or 4 x 4 cubic) when upsampling,
   // which is what a build does unless --max-level asks for a coarser level.
-  double source_spacing = INFINITY;
-  for (size_t g : hits) {
-    for (size_t m : groups_[g].members)
-      source_spacing = std::min(source_spacing, sources_[m].spacing_deg);
-  }
-  const double scale = std::min(1.0, source_spacing / grid_.sample_spacing(key.level));
+  const double scale = scale_for(key, hits);
   const std::string xscale = fmt::format("XSCALE={}", scale),
                     yscale = fmt::format("YSCALE={}", scale);
   std::vector<const char*> args = {"-r",  imagery ? "cubic" : "bilinear",

@@ -15,6 +15,7 @@
 
 #include "direct_resample.h"
 #include "gdal_env.h"
+#include "projected_resample.h"
 #include "relief/base/result.h"
 #include "relief/geo/tile_grid.h"
 #include "relief/tiles/manifest.h"
@@ -51,6 +52,10 @@ class TileWarper {
   // The direct resampler of group g, if it qualifies (decided on first use).
   const DirectResampler* direct_for(size_t g, int level);
   Result<tiles::Raster> warp_direct(const geo::TileKey& key, const std::vector<size_t>& groups);
+  // relief's own kernel for group g (any CRS), if it qualifies (decided on first use).
+  ProjectedResampler* projected_for(size_t g);
+  // The resampling scale GDAL is given for this tile (1 when upsampling).
+  double scale_for(const geo::TileKey& key, const std::vector<size_t>& groups) const;
 
   const std::vector<Source>& sources_;
   const std::vector<MosaicGroup>& groups_;
@@ -61,6 +66,7 @@ class TileWarper {
   SharedDirectSources* shared_;
   std::vector<Dataset> open_;  // per group, opened on first use
   std::vector<std::optional<std::optional<DirectResampler>>> direct_resamplers_;  // per group
+  std::vector<std::optional<std::optional<ProjectedResampler>>> projected_;       // per group
 };
 
 }  // namespace relief::ingest
