@@ -54,8 +54,8 @@ struct GpuProcessor::Impl {
     glProgramUniform2i(prog, glGetUniformLocation(prog, "extent"), width, height + 2 * r);
     glBindTextureUnit(0, in.id());
     glBindImageTexture(1, rows.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
-    constexpr int kGroup = 8;
-    glDispatchCompute(static_cast<GLuint>((width + kGroup - 1) / kGroup),
+    constexpr int kGroup = 8, kRun = 8;  // the shader's local size, outputs per invocation
+    glDispatchCompute(static_cast<GLuint>((width + kGroup * kRun - 1) / (kGroup * kRun)),
                       static_cast<GLuint>((height + 2 * r + kGroup - 1) / kGroup), 1);
     glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT);
     glBindTextureUnit(1, rows.id());
@@ -63,8 +63,9 @@ struct GpuProcessor::Impl {
   }
 
   // One pass: reads `in`, writes the `extent` texels of `out` from `origin` on.
+  // `run`: outputs per invocation down a column (window-rows operators: 8).
   void dispatch(GLuint prog, const StepUniforms& u, const GlTexture& in, const GlTexture& out,
-                int origin, int width, int height) {
+                int origin, int width, int height, int run) {
     glUseProgram(prog);
     glProgramUniform2i(prog, glGetUniformLocation(prog, "origin"), origin, origin);
     glProgramUniform2i(prog, glGetUniformLocation(prog, "extent"), width, height);
@@ -79,7 +80,7 @@ struct GpuProcessor::Impl {
     glBindImageTexture(0, out.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_R32F);
     constexpr int kGroup = 8;  // local_size of the shaders
     glDispatchCompute(static_cast<GLuint>((width + kGroup - 1) / kGroup),
-                      static_cast<GLuint>((height + kGroup - 1) / kGroup), 1);
+                      static_cast<GLuint>((height + kGroup * run - 1) / (kGroup * run)), 1);
     // The next pass samples what this one stored.
     glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_TEXTURE_UPDATE_BARRIER_BIT);
   }
@@ -143,7 +144,7 @@ Result<GpuTile> GpuProcessor::run_on_gpu(const OperatorChain& chain, const tiles
       const GLuint prog = RELIEF_TRY(im.program(name, u.r));
       const int o = consumed + m, ow = w - 2 * o, oh = h - 2 * o;
       if (uses_window_rows(name)) RELIEF_CHECK(im.window_rows(u.r, *in, o, ow, oh));
-      im.dispatch(prog, u, *in, *out, o, ow, oh);
+      im.dispatch(prog, u, *in, *out, o, ow, oh, uses_window_rows(name) ? 8 : 1);
     }
     consumed += m;
     std::swap(in, out);

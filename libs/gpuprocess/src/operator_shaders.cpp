@@ -49,8 +49,13 @@ double tumblin_gamma(double luminance) {
 std::string operator_shader(const std::string& name, int radius) {
   auto it = bodies().find(name);
   if (it == bodies().end()) return {};
-  std::string t = shader_frame() + shader_math() + shader_main() + it->second;
-  if (radius >= 0) with_radius(t, radius);
+  // Window-rows operators have their own main() (runs of outputs).
+  const std::string main = uses_window_rows(name) ? std::string() : shader_main();
+  std::string t = shader_frame() + shader_math() + main + it->second;
+  if (radius >= 0) {
+    with_radius(t, radius);
+    with_runs(t, radius);
+  }
   return t;
 }
 

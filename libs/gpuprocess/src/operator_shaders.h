@@ -37,6 +37,8 @@ void add_local_mapping_shaders(ShaderBodies& bodies);  // local_mapping_shaders.
 // r more rows above and below): mean, lee, kuan.
 bool uses_window_rows(const std::string& name);
 std::string window_rows_shader(int radius);
+// Writes out the runs of a window-rows operator's column pass for `radius`.
+void with_runs(std::string& source, int radius);
 
 // Double-precision dlog, dlog1p, dlog10, dexp, dpow and the nodata helpers
 // (nodata(float), nan_f(), inf_d()), for passes with their own bindings.

@@ -1,7 +1,11 @@
 #include "operator_shaders.h"
 
+#include <fmt/format.h>
+
 namespace relief::gpuprocess {
 namespace {
+
+constexpr int kRun = 8;  // outputs per invocation of the window-rows passes
 
 // The window's count, mean and unbiased variance of the valid samples, summed
 // as window_stats.cpp does: each column top to bottom, then the columns left
@@ -36,35 +40,69 @@ void window_stats(ivec2 p, out double n, out double mean, out double var) {
 )";
 
 // The same statistics in single precision and two passes (the seed's cost on
-// a GPU, and 4-10x less on llvmpipe, which emulates doubles per lane): the
-// rows pass (window_rows_shader) leaves, per texel, the sums over the row
-// segment of 2r + 1 samples of d = v - shift and d^2, their count, and the
-// shift (the segment's centre); this pass adds the 2r + 1 segments of a
-// column, moved to the output sample's own value. Sums around a local value
-// keep mean-of-squares-minus-square-of-mean from cancelling: for the 8-bit
-// amplitudes of SAR stores (and their 2x2 means on coarser levels) every sum
-// is exact in float, and the variance is finished in double.
-constexpr const char* kWindowStatsRows = R"(
+// a GPU, and several times less on llvmpipe, which emulates doubles per
+// lane): the rows pass (window_rows_shader) leaves, per texel, the sums over
+// the row segment of 2r + 1 samples of v and of (v - shift)^2, their count,
+// and the shift (the segment's centre); this pass adds the 2r + 1 segments of
+// a column for a run of kRun outputs per invocation (each segment fetched
+// once), the squares moved to each output sample's own value. Squares around
+// a local value keep mean-of-squares-minus-square-of-mean from cancelling;
+// the mean is the plain sum (non-negative amplitudes: no cancellation, and 0
+// exactly where every sample is 0, as on the CPU); the statistics are
+// finished in double. Defines main(), then local_filter(i, mean, var).
+constexpr const char* kLocalStatsRuns = R"(
 const double kEpsilon = 1e-10LF;
+const int kRun = 8;
 layout(binding = 1) uniform sampler2D rows;  // window_rows_shader's output
-void window_stats(ivec2 p, out double n, out double mean, out double var) {
-  float centre = at(p);  // valid: the callers checked
-  precise float s = 0.0, q = 0.0, c = 0.0;
-  for (int dy = -r; dy <= r; ++dy) {
-    vec4 t = texelFetch(rows, p + ivec2(0, dy), 0);
-    float delta = t.w - centre;  // (v - t.w) + delta = v - centre
-    s += t.x + t.z * delta;
-    q += t.y + 2.0 * delta * t.x + t.z * delta * delta;
-    c += t.z;
-  }
-  n = double(c);
-  const double ds = double(s);
-  mean = double(centre) + ds / n;
-  precise double v = n > 1.0LF ? (double(q) - ds * ds / n) / (n - 1.0LF) : 0.0LF;
-  var = max(0.0LF, v);
+double local_filter(double i, double m, double var);
+void finish(ivec2 o, float centre, float s, float sc, float qc, float c);
+void main() {
+  uvec2 id = gl_GlobalInvocationID.xy;
+  int y0 = int(id.y) * kRun;
+  if (id.x >= uint(extent.x) || y0 >= extent.y) return;
+  ivec2 p = origin + ivec2(int(id.x), y0);
+  int last = textureSize(rows, 0).y - 1;
+  vec4 t[kRun + 2 * r];
+  for (int i = 0; i < kRun + 2 * r; ++i) t[i] = texelFetch(rows, ivec2(p.x, min(p.y - r + i, last)), 0);
+  float centre, delta, shifted;
+  precise float s, sc, qc, c;
+@RUNS@}
+void finish(ivec2 o, float centre, float s, float sc, float qc, float c) {
+  if (o.y >= origin.y + extent.y) return;
+  double n = double(c), ds = double(sc);
+  double mean = double(s) / n;
+  precise double v = n > 1.0LF ? (double(qc) - ds * ds / n) / (n - 1.0LF) : 0.0LF;
+  float result = nodata(centre) ? centre : float(local_filter(double(centre), mean, max(0.0LF, v)));
+  imageStore(dst, o, vec4(result, 0.0, 0.0, 0.0));
 }
 )";
 
+// The runs of the column pass, written out as rows_runs(). Per output: the
+// segments' squares around their shifts, moved to the output's value
+// ((v - t.w) + delta = v - centre), and the plain sum for the mean.
+std::string column_runs(int r) {
+  std::string code;
+  for (int i = 0; i < kRun; ++i) {
+    code += fmt::format(
+        "  centre = at(p + ivec2(0, {}));\n  s = 0.0, sc = 0.0, qc = 0.0, c = 0.0;\n", i);
+    for (int j = i; j <= i + 2 * r; ++j) {
+      code += fmt::format(
+          "  delta = t[{0}].w - centre; shifted = t[{0}].x - t[{0}].z * t[{0}].w;\n"
+          "  s += t[{0}].x; sc += shifted + t[{0}].z * delta;\n"
+          "  qc += t[{0}].y + 2.0 * delta * shifted + t[{0}].z * delta * delta; c += t[{0}].z;\n",
+          j);
+    }
+    code += fmt::format("  finish(p + ivec2(0, {}), centre, s, sc, qc, c);\n", i);
+  }
+  return code;
+}
+
+// One invocation per kRun consecutive outputs of a row: the 2r + kRun
+// samples they need are fetched once (fetches are what llvmpipe spends most
+// on), then each output's sums are added anew from them (a sliding sum would
+// keep the rounding of samples that left the window). Per output: the sum
+// of the valid samples, the sum of squared deviations from the output's own
+// sample (the shift), their count, and the shift.
 constexpr const char* kWindowRows = R"(#version 450 core
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(binding = 0) uniform sampler2D src;
@@ -72,25 +110,43 @@ layout(rgba32f, binding = 1) writeonly uniform image2D rows;
 uniform ivec2 origin;
 uniform ivec2 extent;
 uniform int r;
+const int kRun = 8;
 bool nodata(float v) { return (floatBitsToUint(v) & 0x7fffffffu) > 0x7f800000u; }
 void main() {
   uvec2 id = gl_GlobalInvocationID.xy;
-  if (id.x >= uint(extent.x) || id.y >= uint(extent.y)) return;
-  ivec2 p = origin + ivec2(id);
-  float shift = texelFetch(src, p, 0).r;
-  if (nodata(shift)) shift = 0.0;
-  precise float s = 0.0, q = 0.0, c = 0.0;
-  for (int dx = -r; dx <= r; ++dx) {  // selects, not branches (see kWindowStats)
-    float v = texelFetch(src, p + ivec2(dx, 0), 0).r;
-    bool valid = !nodata(v);
-    float d = valid ? v - shift : 0.0;
-    s += d;
-    q += d * d;
-    c += valid ? 1.0 : 0.0;
+  int x0 = int(id.x) * kRun;
+  if (x0 >= extent.x || id.y >= uint(extent.y)) return;
+  ivec2 p = origin + ivec2(x0, int(id.y));
+  int last = textureSize(src, 0).x - 1;
+  float v[kRun + 2 * r];
+  bool ok[kRun + 2 * r];
+  for (int i = 0; i < kRun + 2 * r; ++i) {
+    v[i] = texelFetch(src, ivec2(min(p.x - r + i, last), p.y), 0).r;
+    ok[i] = !nodata(v[i]);
   }
-  imageStore(rows, p, vec4(s, q, c, shift));
-}
+  float shift, d;
+  precise float s, q, c;
+@RUNS@}
 )";
+
+// The runs of the rows pass, written out (constant indices: the arrays stay
+// in registers; llvmpipe keeps dynamically indexed ones in memory).
+std::string rows_runs(int r) {
+  std::string code;
+  for (int i = 0; i < kRun; ++i) {
+    code += fmt::format("  shift = ok[{0}] ? v[{0}] : 0.0;\n  s = 0.0, q = 0.0, c = 0.0;\n", i + r);
+    for (int j = i; j <= i + 2 * r; ++j) {
+      code += fmt::format(
+          "  d = ok[{0}] ? v[{0}] - shift : 0.0; s += ok[{0}] ? v[{0}] : 0.0; q += d * d; "
+          "c += ok[{0}] ? 1.0 : 0.0;\n",
+          j);
+    }
+    code += fmt::format(
+        "  if (x0 + {0} < extent.x) imageStore(rows, p + ivec2({0}, 0), vec4(s, q, c, shift));\n",
+        i);
+  }
+  return code;
+}
 
 constexpr const char* kLocalStats = R"(
 // A local-statistics filter (speckle.cpp local_stats_filter): filter(i, mean, var).
@@ -106,7 +162,7 @@ float apply(ivec2 p) {
 
 // Lee and Kuan (speckle.cpp mmse_filter); k[0] = Cu^2 = 1 / looks.
 std::string mmse(const std::string& weight) {
-  return std::string(kWindowStatsRows) + kLocalStats + R"(
+  return std::string(kLocalStatsRuns) + R"(
 double local_filter(double i, double m, double var) {
   double cu2 = k[0];
   if (abs(m) < kEpsilon) return 0.0LF;
@@ -233,7 +289,13 @@ bool uses_window_rows(const std::string& name) {
 std::string window_rows_shader(int radius) {
   std::string t = kWindowRows;
   with_radius(t, radius);
+  t.replace(t.find("@RUNS@"), 6, rows_runs(radius));
   return t;
+}
+void with_runs(std::string& source, int radius) {
+  if (const size_t at = source.find("@RUNS@"); at != std::string::npos) {
+    source.replace(at, 6, column_runs(radius));
+  }
 }
 bool constant_radius(const std::string& name) {
   return uses_window_rows(name);
@@ -243,7 +305,7 @@ bool constant_radius(const std::string& name) {
 void add_speckle_shaders(ShaderBodies& bodies) {
   bodies.insert({
       // Speckle filters.
-      {"mean", std::string(kWindowStatsRows) + kLocalStats +
+      {"mean", std::string(kLocalStatsRuns) +
                    "double local_filter(double i, double m, double v) {\n"
                    "  return m;\n}\n"},
       {"lee", mmse("1.0LF - cu2 / ci2")},
