@@ -79,9 +79,11 @@ TEST(TextureRender, DrawTimeProcessingEqualsTheOfflineStore) {
   // Lee r3 then the linear mapping a / (mean + 3 std) of the input's
   // statistics, on the GPU per quad; offline: the Lee store through the grey
   // map over [0, mean + 3 std] of the same statistics, the same mapping.
-  const Image drawn = render({"--texture", s.sar.string(), "--texture-op", "lee", "--texture-param",
-                              "radius=3", "--texture-op", "linear", "--look-at", kDown},
-                             dir / "drawn.png");
+  // (--process-on gpu: auto would be the CPU on llvmpipe; ProcessingOnTheCpuEqualsTheGpu.)
+  const Image drawn =
+      render({"--texture", s.sar.string(), "--texture-op", "lee", "--texture-param", "radius=3",
+              "--texture-op", "linear", "--process-on", "gpu", "--look-at", kDown},
+             dir / "drawn.png");
   auto sar = tiles::Store::open(s.sar);
   ASSERT_TRUE(sar) << sar.error().message;
   const auto& st = sar->manifest().stats;
