@@ -9,6 +9,7 @@
 // Thread safety: every member is called from the renderer's thread; the
 // workers only touch the queue and the results, under the mutex.
 #include <condition_variable>
+#include <cstdint>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -37,6 +38,7 @@ class CpuLayerProcessing {
     int border = 0;
     process::GlobalStats stats;
     double priority = 0;  // higher first
+    uint64_t frame = 0;   // the last frame that asked for it (begin_frame)
   };
 
   explicit CpuLayerProcessing(unsigned threads);  // 0: one per core
@@ -54,6 +56,14 @@ class CpuLayerProcessing {
   // Forgets queued jobs and results of versions before `version`.
   void drop_before(uint32_t version);
 
+  // A new frame: jobs the previous frame did not ask for again (quads out
+  // of view) are dropped from the queue.
+  void begin_frame();
+
+  // Finished results kept at most (those never taken, e.g. an ancestor's
+  // while its children's composites were made first); the oldest go first.
+  static constexpr size_t kMaxResults = 64;
+
  private:
   void work();
 
@@ -61,8 +71,13 @@ class CpuLayerProcessing {
   std::condition_variable wake_;
   bool stopping_ = false;
   uint32_t latest_version_ = 0;  // results of older versions are dropped
+  struct Done {
+    Result<lod::TilePtr> result;  // null: running
+    uint64_t order = 0;           // of finishing
+  };
   std::map<Key, Job> queued_;
-  std::map<Key, Result<lod::TilePtr>> done_;  // null: running
+  std::map<Key, Done> done_;
+  uint64_t frame_ = 0, finished_ = 0;
   std::vector<std::jthread> threads_;
 };
 

@@ -263,6 +263,7 @@ class GlTerrainRenderer final : public TerrainRenderer {
     slots_.begin_frame();
     made_this_frame_ = 0;
     processed_this_frame_ = 0;
+    if (cpu_) cpu_->begin_frame();
     const uint64_t uploads_before = slots_.uploads(), evicted_before = slots_.evicted();
     const lod::MeshTopology& mesh = elevation_.mesh();
     records_.clear();
