@@ -14,7 +14,10 @@
 // on every core) on the tiles the complete frame drew, processing only (tiles
 // already decoded in memory, no colour map, no upload). Medians of RUNS runs.
 // With a fourth argument, the rows are also appended to that file as a
-// markdown table.
+// markdown table. Every chain runs on the GPU path; the target's chain runs
+// again processed on the CPU (render::ProcessOn::cpu, the automatic choice
+// on llvmpipe). CHAINS=NAME,... in the environment: only the chains whose
+// names start so.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
