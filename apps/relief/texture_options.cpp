@@ -26,6 +26,10 @@ const char* const kTextureOptionsHelp =
   --lens LON,LAT,RADIUS_M  a lens over the --texture before it: inside the circle
                      its samples go through the --lens-op chain instead
   --lens-op OP, --lens-param K=V  the lens's chain (as --texture-op, --texture-param)
+  --process-on WHERE  gpu, cpu or auto (default): where the layers' operators
+                     run; cpu: the CPU kernels on worker threads, the result
+                     mapped and composited on the GPU; auto: cpu on a software
+                     renderer (llvmpipe), gpu otherwise
   --detect           point-target hints over the first SAR layer: a circle, the
                      side-lobe axes and a PSLR bar per target (docs/target-hints.md)
   --detect-level F, --detect-sensitivity T  as relief detect's --level (default
@@ -118,9 +122,11 @@ Result<render::TextureLayer> make_layer(const LayerText& t, const tiles::Store& 
 Result<TextureLayers> take_texture_layers(std::vector<std::string>& argv) {
   std::vector<std::string> rest;
   std::vector<LayerText> texts;
+  std::optional<render::ProcessOn> process_on;
   for (size_t i = 0; i < argv.size(); ++i) {
     std::string name = argv[i], value;
-    if (!name.starts_with("--texture") && !name.starts_with("--lens")) {
+    if (!name.starts_with("--texture") && !name.starts_with("--lens") &&
+        !name.starts_with("--process-on")) {
       rest.push_back(argv[i]);
       continue;
     }
@@ -133,6 +139,12 @@ Result<TextureLayers> take_texture_layers(std::vector<std::string>& argv) {
     }
     if (name == "--texture") {
       texts.push_back({value, {}, {}, {}, {}, {}});
+      continue;
+    }
+    if (name == "--process-on") {
+      auto where = render::parse_process_on(value);
+      if (!where) return fail("--process-on: " + where.error().message);
+      process_on = *where;
       continue;
     }
     if (texts.empty()) return fail(fmt::format("{} {}: comes before any --texture", name, value));
@@ -165,12 +177,16 @@ Result<TextureLayers> take_texture_layers(std::vector<std::string>& argv) {
       return fail(fmt::format("unknown option '{}'", name));
     }
   }
+  if (process_on && texts.empty()) {
+    return fail("--process-on: there is no --texture layer to process");
+  }
   argv = std::move(rest);
   TextureLayers out;
   for (const LayerText& t : texts) {
     out.stores.push_back(RELIEF_TRY(open_store(t.store)));
     out.paths.push_back(t.store);
     out.layers.push_back(RELIEF_TRY(make_layer(t, out.stores.back())));
+    if (process_on) out.layers.back().process_on = *process_on;
   }
   return out;
 }

@@ -4,6 +4,7 @@
 //   --texture STORE [--texture-op OP [--texture-param K=V]...]...
 //   [--texture-range MIN,MAX] [--texture-opacity A] [--texture-colormap NAME]
 //   [--lens LON,LAT,RADIUS_M [--lens-op OP [--lens-param K=V]...]...]...
+// and once, for every layer, --process-on gpu|cpu|auto.
 // They repeat and their order matters (each --texture-op and its
 // --texture-param belong to the --texture before them), so they are taken out
 // of the arguments before the others are parsed.

@@ -14,11 +14,15 @@
 // on every core) on the tiles the complete frame drew, processing only (tiles
 // already decoded in memory, no colour map, no upload). Medians of RUNS runs.
 // With a fourth argument, the rows are also appended to that file as a
-// markdown table.
+// markdown table. Every chain runs on the GPU path; the target's chain runs
+// again processed on the CPU (render::ProcessOn::cpu, the automatic choice
+// on llvmpipe). CHAINS=NAME,... in the environment: only the chains whose
+// names start so.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <set>
 #include <string>
 #include <thread>
@@ -46,6 +50,7 @@ struct Case {
   std::string name, change;
   std::vector<StepText> a, b;
   double range_scale = 1;
+  render::ProcessOn where = render::ProcessOn::gpu;
 };
 
 std::vector<Case> cases() {
@@ -68,6 +73,14 @@ std::vector<Case> cases() {
        {lee3, {"linear", {"sigmas=3"}}},
        {lee3, {"linear", {"sigmas=2.5"}}},
        1},
+      // The same chain processed on the CPU (--process-on cpu, the automatic
+      // choice on llvmpipe), mapped and composited on the GPU.
+      {"lee radius=3 + linear, on the CPU",
+       "linear sigmas 3 / 2.5",
+       {lee3, {"linear", {"sigmas=3"}}},
+       {lee3, {"linear", {"sigmas=2.5"}}},
+       1,
+       render::ProcessOn::cpu},
       {"lee radius=3 + ext-schlick max_radius=4",
        "ext-schlick d 0.5 / 0.3",
        {lee3, schlick("0.5")},
@@ -99,9 +112,11 @@ double median(std::vector<double> v) {
 // The layer as `relief render --texture` makes it: SAR amplitudes mapped
 // over [min, mean + 3 std], a dynamic-range mapping's output over [0, 1].
 Result<render::TextureLayer> make_layer(const tiles::Store& store,
-                                        const std::vector<StepText>& steps, double range_scale) {
+                                        const std::vector<StepText>& steps, double range_scale,
+                                        render::ProcessOn where) {
   render::TextureLayer l;
   l.store = &store;
+  l.process_on = where;
   for (const StepText& s : steps)
     l.chain.steps.push_back(RELIEF_TRY(gpuprocess::make_step(s.op, s.params)));
   RELIEF_CHECK(gpuprocess::check_chain_for(l.chain, store.manifest(), "SAR store"));
@@ -156,8 +171,8 @@ std::vector<geo::TileKey> drawn_tiles(const view::Scene& scene, const tiles::Sto
 
 Result<Row> measure(const tiles::Store& store, const Case& c, const lod::Camera& camera,
                     render::RenderTarget& target, int runs) {
-  const render::TextureLayer a = RELIEF_TRY(make_layer(store, c.a, 1));
-  const render::TextureLayer b = RELIEF_TRY(make_layer(store, c.b, c.range_scale));
+  const render::TextureLayer a = RELIEF_TRY(make_layer(store, c.a, 1, c.where));
+  const render::TextureLayer b = RELIEF_TRY(make_layer(store, c.b, c.range_scale, c.where));
   view::SceneOptions o;
   o.interactive = true;
   o.texture_layers = {a};
@@ -282,7 +297,20 @@ int main(int argc, char** argv) {
               "frames", "tiles", "gpu ms", "gpu Ms/s", "cpu ms", "cpu Ms/s", "redraw ms",
               "gpu/cpu");
   bool failed = false;
+  // CHAINS=NAME,NAME: only the chains whose names start with one of them.
+  const char* only = std::getenv("CHAINS");
+  const auto chosen = [only](const std::string& name) {
+    if (!only || !*only) return true;
+    std::string list = only;
+    for (size_t start = 0; start <= list.size();) {
+      const size_t end = std::min(list.find(',', start), list.size());
+      if (end > start && name.starts_with(list.substr(start, end - start))) return true;
+      start = end + 1;
+    }
+    return false;
+  };
   for (const Case& c : cases()) {
+    if (!chosen(c.name)) continue;
     auto row = measure(*store, c, camera, **target, runs);
     if (!row) {
       std::fprintf(stderr, "%s: %s\n", c.name.c_str(), row.error().message.c_str());

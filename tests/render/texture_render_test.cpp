@@ -79,9 +79,11 @@ TEST(TextureRender, DrawTimeProcessingEqualsTheOfflineStore) {
   // Lee r3 then the linear mapping a / (mean + 3 std) of the input's
   // statistics, on the GPU per quad; offline: the Lee store through the grey
   // map over [0, mean + 3 std] of the same statistics, the same mapping.
-  const Image drawn = render({"--texture", s.sar.string(), "--texture-op", "lee", "--texture-param",
-                              "radius=3", "--texture-op", "linear", "--look-at", kDown},
-                             dir / "drawn.png");
+  // (--process-on gpu: auto would be the CPU on llvmpipe; ProcessingOnTheCpuEqualsTheGpu.)
+  const Image drawn =
+      render({"--texture", s.sar.string(), "--texture-op", "lee", "--texture-param", "radius=3",
+              "--texture-op", "linear", "--process-on", "gpu", "--look-at", kDown},
+             dir / "drawn.png");
   auto sar = tiles::Store::open(s.sar);
   ASSERT_TRUE(sar) << sar.error().message;
   const auto& st = sar->manifest().stats;
@@ -100,6 +102,26 @@ TEST(TextureRender, DrawTimeProcessingEqualsTheOfflineStore) {
   const Image raw = render(
       {"--texture", s.sar.string(), "--texture-op", "linear", "--look-at", kDown}, dir / "raw.png");
   EXPECT_GT(compare(drawn, raw).over_one, size_t{kW * kH / 10});
+}
+
+// --process-on cpu runs the chain with the CPU kernels and composites on the
+// GPU; the still equals --process-on gpu's within one grey level (the
+// linear mapping divides in double on the CPU, in float on the GPU), and
+// auto (the default) is one of the two.
+TEST(TextureRender, ProcessingOnTheCpuEqualsTheGpu) {
+  const SarStores& s = stores();
+  ScratchDir dir("texture_cpu");
+  auto still = [&](const std::string& where) {
+    return render({"--texture", s.sar.string(), "--texture-op", "lee", "--texture-param",
+                   "radius=3", "--texture-op", "linear", "--process-on", where, "--look-at", kDown},
+                  dir / (where + ".png"));
+  };
+  const Image cpu = still("cpu"), gpu = still("gpu"), automatic = still("auto");
+  const Difference d = compare(cpu, gpu);
+  RecordProperty("largest", d.largest);
+  EXPECT_LE(d.largest, 1);
+  EXPECT_GT(distinct_greys(cpu), 100u) << "a flat image would compare too easily";
+  EXPECT_TRUE(automatic.rgba == cpu.rgba || automatic.rgba == gpu.rgba);
 }
 
 TEST(TextureRender, ElevationIsOptionalForStillsAndPaths) {
@@ -178,6 +200,9 @@ TEST(TextureRender, BadTextureOptionsAreOneLineErrors) {
                "--lens-op linear: comes before any --lens");
   expect_error({"--texture", sar, "--lens", "169.4485,-19.5273,100", "--lens-op", "nope"},
                "unknown operator 'nope'");
+  expect_error({"--texture", sar, "--process-on", "tpu"},
+               "--process-on: unknown processing backend 'tpu' (gpu, cpu, auto)");
+  expect_error({"--process-on", "cpu"}, "--process-on: there is no --texture layer to process");
   expect_error({"--texture", world.string(), "--detect"}, "--detect: needs a SAR texture layer");
   expect_error({"--texture", sar, "--detect", "--detect-level", "2"},
                "--detect-level: must be in (0, 1]");

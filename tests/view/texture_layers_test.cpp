@@ -4,6 +4,7 @@
 // next interactive frame, and layers composite by opacity.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <thread>
@@ -34,10 +35,13 @@ gpuprocess::OperatorChain chain_of(const std::string& op, std::vector<std::strin
   return c;
 }
 
+// On the GPU unless told (ProcessOn::automatic would be the CPU on llvmpipe).
 render::TextureLayer layer(gpuprocess::OperatorChain chain, float opacity = 1,
-                           gpuprocess::ColorMap map = gpuprocess::ColorMap::grey) {
+                           gpuprocess::ColorMap map = gpuprocess::ColorMap::grey,
+                           render::ProcessOn where = render::ProcessOn::gpu) {
   render::TextureLayer l;
   l.store = &sar();
+  l.process_on = where;
   if (chain.steps.empty()) l.range_max = 100;  // raw amplitudes; a mapping gives [0, 1]
   l.chain = std::move(chain);
   l.opacity = opacity;
@@ -105,6 +109,62 @@ TEST_F(TextureLayersTest, AParameterChangeLeavesNoStaleTileInTheNextFrame) {
   EXPECT_NE(after, before) << "the new parameters change the image";
   // Every tile of the next frame has the new parameters: it is the still of them.
   EXPECT_EQ(after, still({layer(chain_of("lee", {"radius=3"}, {"sigmas=1.5"}))}));
+}
+
+// The largest difference between two frames' channels.
+int largest_difference(const std::vector<uint8_t>& a, const std::vector<uint8_t>& b) {
+  int largest = a.size() == b.size() ? 0 : 256;
+  for (size_t i = 0; i < a.size() && i < b.size(); ++i) {
+    largest = std::max(largest, std::abs(int(a[i]) - int(b[i])));
+  }
+  return largest;
+}
+
+// --process-on cpu: the chain runs on worker threads, so the frames after a
+// change wait for none; they show no tile of the old parameters (a quad shows
+// its new composite, an ancestor's, or none), and the complete frame equals
+// the GPU's still within a grey level (the linear mapping's division: double
+// on the CPU, float on the GPU). The change also turns the grey map into
+// viridis, so an old, grey pixel cannot pass for a new one.
+TEST_F(TextureLayersTest, OnTheCpuAParameterChangeLeavesNoStaleTileAndEqualsTheGpu) {
+  const auto cpu = render::ProcessOn::cpu;
+  using gpuprocess::ColorMap;
+  auto s =
+      scene({layer(chain_of("lee", {"radius=3"}, {"sigmas=3"}), 1, ColorMap::grey, cpu)}, true);
+  ASSERT_TRUE(s);
+  // Frames until complete; with `old`, none may show one of its grey pixels
+  // where the bare ground is not that colour.
+  auto until_complete = [&](const std::vector<uint8_t>& old, const std::vector<uint8_t>& ground) {
+    for (int frame = 0; frame < 400; ++frame) {
+      auto f = s->draw(kDown, *target_);
+      EXPECT_TRUE(f) << f.error().message;
+      if (!f) return false;
+      const std::vector<uint8_t> pixels = *target_->read_rgba();
+      for (size_t i = 0; i < pixels.size() && !old.empty(); i += 4) {
+        const bool grey = pixels[i] == pixels[i + 1] && pixels[i] == pixels[i + 2];
+        const bool stale = grey && std::equal(&pixels[i], &pixels[i] + 3, &old[i]) &&
+                           !std::equal(&pixels[i], &pixels[i] + 3, &ground[i]);
+        if (stale) {
+          ADD_FAILURE() << "frame " << frame << ": pixel " << i / 4 << " has the old parameters";
+          return false;
+        }
+      }
+      if (f->complete) return true;
+      std::this_thread::sleep_for(5ms);
+    }
+    return false;
+  };
+  const auto gpu_before = still({layer(chain_of("lee", {"radius=3"}, {"sigmas=3"}))});
+  ASSERT_TRUE(until_complete({}, {}));
+  const std::vector<uint8_t> before = *target_->read_rgba();
+  EXPECT_LE(largest_difference(before, gpu_before), 1);
+
+  const auto changed = chain_of("lee", {"radius=3"}, {"sigmas=1.5"});
+  const auto gpu_after = still({layer(changed, 1, ColorMap::viridis)});
+  const auto ground = still({layer({}, 0)});
+  ASSERT_TRUE(s->set_texture_layers({layer(changed, 1, ColorMap::viridis, cpu)}));
+  ASSERT_TRUE(until_complete(before, ground));
+  EXPECT_LE(largest_difference(*target_->read_rgba(), gpu_after), 1);
 }
 
 TEST_F(TextureLayersTest, LayersCompositeByOpacity) {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 
 #include <fmt/format.h>
 
@@ -15,18 +16,23 @@ namespace {
 // One pass per layer: the layer's sample under each output texel (nearest),
 // mapped to a premultiplied colour, then "over" what the layers below left in
 // `accum`. Positions in interior samples of the layer's tile.
-constexpr const char* kLayerPass = R"(#version 450 core
+// Compiled per variant (layer_variant): RGBA, BOTTOM, TOP and VIRIDIS are
+// constants, so a variant holds only its own fetches and stores (llvmpipe
+// runs both sides of a branch under a mask, a dead side costs as much).
+constexpr const char* kLayerPass = R"(
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(binding = 0) uniform sampler2D values;   // R32F, single-band layers
 layout(binding = 1) uniform sampler2D colours;  // RGBA8 premultiplied, imagery layers
 layout(rgba32f, binding = 0) uniform image2D accum;
-uniform int rgba;
+layout(rgba8, binding = 1) writeonly uniform image2D result;  // the renderer's array layer
+const bool rgba = RGBA != 0;
+const bool bottom = BOTTOM != 0;  // the first layer: nothing below, accum not read
+const bool top = TOP != 0;        // the last layer: the composite goes to result, accum not written
 uniform ivec2 size;      // output texels: interior plus a one-sample border
 uniform vec4 window;     // x0, y0, width, height of the composite in the layer's interior
 uniform ivec2 first;     // texel of the layer's interior sample (0, 0)
 uniform ivec2 interior;  // the layer's interior size; one border sample is readable beyond it
 uniform vec2 range;
-uniform int colormap;    // 0 grey, 1 viridis
 uniform float opacity;
 
 bool nodata(float v) { return (floatBitsToUint(v) & 0x7fffffffu) > 0x7f800000u; }
@@ -49,7 +55,7 @@ void main() {
   vec2 u = (vec2(p) - 0.5) / vec2(size - 2);  // 0..1 over the composite's interior
   ivec2 s = clamp(ivec2(floor(window.xy + u * window.zw)), ivec2(-1), interior);
   vec4 c;
-  if (rgba != 0) {
+  if (rgba) {
     c = texelFetch(colours, first + s, 0);
   } else {
     float v = texelFetch(values, first + s, 0).r;
@@ -57,12 +63,16 @@ void main() {
       c = vec4(0.0);
     } else {
       float t = clamp((v - range.x) / (range.y - range.x), 0.0, 1.0);
-      c = vec4(colormap == 1 ? viridis(t) : vec3(t), 1.0);
+      c = vec4(VIRIDIS != 0 ? viridis(t) : vec3(t), 1.0);
     }
   }
   c *= opacity;
-  vec4 below = imageLoad(accum, p);
-  imageStore(accum, p, c + below * (1.0 - c.a));
+  if (!bottom) c += imageLoad(accum, p) * (1.0 - c.a);
+  if (top) {
+    imageStore(result, p, clamp(c, 0.0, 1.0));
+  } else {
+    imageStore(accum, p, c);
+  }
 }
 )";
 
@@ -150,8 +160,22 @@ const char* to_string(ColorMap map) {
 }
 
 struct Compositor::Impl {
-  GlProgram layer_pass, store_pass, lens_pass;
+  std::map<int, GlProgram> layer_passes;  // by layer_variant()
+  GlProgram store_pass, lens_pass;
   Texture2D accum, colours, values;
+
+  // The layer pass for an RGBA layer or not, the bottom one or not, the top
+  // one or not, through viridis or grey; compiled on first use.
+  Result<GLuint> layer_pass(bool rgba, bool bottom, bool top, bool viridis) {
+    const int variant = (rgba ? 1 : 0) | (bottom ? 2 : 0) | (top ? 4 : 0) | (viridis ? 8 : 0);
+    if (auto it = layer_passes.find(variant); it != layer_passes.end()) return it->second.id();
+    const std::string source = fmt::format(
+        "#version 450 core\n#define RGBA {}\n#define BOTTOM {}\n#define TOP {}\n"
+        "#define VIRIDIS {}\n{}",
+        rgba ? 1 : 0, bottom ? 1 : 0, top ? 1 : 0, viridis ? 1 : 0, kLayerPass);
+    GlProgram p = RELIEF_TRY(compile_compute("composite layer", source));
+    return layer_passes.emplace(variant, std::move(p)).first->second.id();
+  }
 
   // The layer's values with its lenses merged in, in `values`; returns the
   // texel of interior sample (0, 0) there.
@@ -197,7 +221,7 @@ Compositor::~Compositor() = default;
 
 Result<std::unique_ptr<Compositor>> Compositor::create() {
   auto impl = std::make_unique<Impl>();
-  impl->layer_pass = RELIEF_TRY(compile_compute("composite layer", kLayerPass));
+  RELIEF_TRY(impl->layer_pass(false, true, true, false));  // the shader compiles
   impl->store_pass = RELIEF_TRY(compile_compute("composite store", kStorePass));
   impl->lens_pass = RELIEF_TRY(compile_compute("composite lens", kLensPass));
   return std::unique_ptr<Compositor>(new Compositor(std::move(impl)));
@@ -207,11 +231,14 @@ Status Compositor::composite(GpuProcessor& gpu, std::span<const CompositeLayer> 
                              uint32_t array_texture, int array_layer, int width, int height) {
   Impl& im = *impl_;
   im.accum.ensure(GL_RGBA32F, width, height);
-  const float clear[4] = {0, 0, 0, 0};
-  glClearTexImage(im.accum.id, 0, GL_RGBA, GL_FLOAT, clear);
-  const GLuint lp = im.layer_pass.id();
-  auto uniform = [lp](const char* name) { return glGetUniformLocation(lp, name); };
-  for (const CompositeLayer& l : layers) {
+  // The first layer's pass starts the composite and the last one's stores it
+  // (one pass for one layer: no clear, no store pass).
+  if (layers.empty()) {
+    const float clear[4] = {0, 0, 0, 0};
+    glClearTexImage(im.accum.id, 0, GL_RGBA, GL_FLOAT, clear);
+  }
+  for (size_t i = 0; i < layers.size(); ++i) {
+    const CompositeLayer& l = layers[i];
     const tiles::Raster& t = *l.tile;
     const int iw = t.width() - 2 * l.border, ih = t.height() - 2 * l.border;
     const bool rgba = t.type() == tiles::SampleType::UInt8;
@@ -230,8 +257,10 @@ Status Compositor::composite(GpuProcessor& gpu, std::span<const CompositeLayer> 
       glBindTextureUnit(0, g.texture);
       if (!l.lenses.empty()) first = RELIEF_TRY(im.merge_lenses(gpu, l, g));
     }
+    const GLuint lp = RELIEF_TRY(
+        im.layer_pass(rgba, i == 0, i + 1 == layers.size(), l.colormap == ColorMap::viridis));
+    auto uniform = [lp](const char* name) { return glGetUniformLocation(lp, name); };
     glUseProgram(lp);
-    glProgramUniform1i(lp, uniform("rgba"), rgba ? 1 : 0);
     glProgramUniform2i(lp, uniform("size"), width, height);
     glProgramUniform4f(lp, uniform("window"), static_cast<float>(l.window[0]),
                        static_cast<float>(l.window[1]), static_cast<float>(l.window[2]),
@@ -239,20 +268,22 @@ Status Compositor::composite(GpuProcessor& gpu, std::span<const CompositeLayer> 
     glProgramUniform2i(lp, uniform("first"), first, first);
     glProgramUniform2i(lp, uniform("interior"), iw, ih);
     glProgramUniform2f(lp, uniform("range"), l.range_min, l.range_max);
-    glProgramUniform1i(lp, uniform("colormap"), l.colormap == ColorMap::viridis ? 1 : 0);
     glProgramUniform1f(lp, uniform("opacity"), l.opacity);
     glBindImageTexture(0, im.accum.id, 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
+    glBindImageTexture(1, array_texture, 0, GL_FALSE, array_layer, GL_WRITE_ONLY, GL_RGBA8);
     glDispatchCompute(groups(width), groups(height), 1);
     // The next layer reads what this one stored; the processor reuses its textures.
     glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT |
                     GL_TEXTURE_UPDATE_BARRIER_BIT);
   }
-  const GLuint sp = im.store_pass.id();
-  glUseProgram(sp);
-  glProgramUniform2i(sp, glGetUniformLocation(sp, "size"), width, height);
-  glBindImageTexture(0, im.accum.id, 0, GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32F);
-  glBindImageTexture(1, array_texture, 0, GL_FALSE, array_layer, GL_WRITE_ONLY, GL_RGBA8);
-  glDispatchCompute(groups(width), groups(height), 1);
+  if (layers.empty()) {  // nothing drawn: transparent
+    const GLuint sp = im.store_pass.id();
+    glUseProgram(sp);
+    glProgramUniform2i(sp, glGetUniformLocation(sp, "size"), width, height);
+    glBindImageTexture(0, im.accum.id, 0, GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32F);
+    glBindImageTexture(1, array_texture, 0, GL_FALSE, array_layer, GL_WRITE_ONLY, GL_RGBA8);
+    glDispatchCompute(groups(width), groups(height), 1);
+  }
   // The terrain shader samples the result.
   glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
   glUseProgram(0);

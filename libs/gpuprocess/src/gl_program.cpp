@@ -36,9 +36,10 @@ Result<GlProgram> compile_compute(const std::string& name, const std::string& so
   return program;
 }
 
-GlTexture::GlTexture(int width, int height) : width_(width), height_(height) {
+GlTexture::GlTexture(int width, int height, GLenum internal_format)
+    : width_(width), height_(height) {
   glCreateTextures(GL_TEXTURE_2D, 1, &id_);
-  glTextureStorage2D(id_, 1, GL_R32F, width, height);
+  glTextureStorage2D(id_, 1, internal_format, width, height);
   glTextureParameteri(id_, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
   glTextureParameteri(id_, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
 }

@@ -31,7 +31,8 @@ Result<GlProgram> compile_compute(const std::string& name, const std::string& so
 class GlTexture {
  public:
   GlTexture() = default;
-  GlTexture(int width, int height);  // R32F, nearest, one level
+  // Nearest, one level; R32F unless `internal_format` says otherwise.
+  GlTexture(int width, int height, GLenum internal_format = GL_R32F);
   GlTexture(GlTexture&& o) noexcept
       : id_(std::exchange(o.id_, 0)), width_(o.width_), height_(o.height_) {}
   GlTexture& operator=(GlTexture&& o) noexcept {

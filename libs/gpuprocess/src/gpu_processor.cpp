@@ -18,23 +18,54 @@ bool runs_on_gpu(const std::string& name) {
 struct GpuProcessor::Impl {
   std::map<std::string, GlProgram> programs;  // compiled on first use
   GlTexture ping, pong;                       // the size of the last tile
+  GlTexture rows;                             // window row sums (RGBA32F), as ping
+  std::map<int, GlProgram> rows_programs;     // window_rows_shader(r), on first use
   WaveletPasses wavelet;
 
-  Result<GLuint> program(const std::string& name) {
-    if (auto it = programs.find(name); it != programs.end()) return it->second.id();
-    GlProgram p = RELIEF_TRY(compile_compute(name, operator_shader(name)));
-    return programs.emplace(name, std::move(p)).first->second.id();
+  // Operator `name`'s program; for a constant_radius() operator, radius r's.
+  Result<GLuint> program(const std::string& name, int r) {
+    const bool constant = constant_radius(name);
+    const std::string key = constant ? fmt::format("{} r={}", name, r) : name;
+    if (auto it = programs.find(key); it != programs.end()) return it->second.id();
+    GlProgram p = RELIEF_TRY(compile_compute(key, operator_shader(name, constant ? r : -1)));
+    return programs.emplace(key, std::move(p)).first->second.id();
   }
 
   void ensure_textures(int width, int height) {
     if (ping.width() == width && ping.height() == height) return;
     ping = GlTexture(width, height);
     pong = GlTexture(width, height);
+    rows = GlTexture();
+  }
+
+  // The rows pass of a window-statistics step (uses_window_rows) of radius r
+  // whose output starts `origin` texels in and is width x height: the rows
+  // r above and below it too. Left bound to texture unit 1.
+  Status window_rows(int r, const GlTexture& in, int origin, int width, int height) {
+    auto it = rows_programs.find(r);
+    if (it == rows_programs.end()) {
+      GlProgram p = RELIEF_TRY(compile_compute("window rows", window_rows_shader(r)));
+      it = rows_programs.emplace(r, std::move(p)).first;
+    }
+    if (!rows.id()) rows = GlTexture(in.width(), in.height(), GL_RGBA32F);
+    const GLuint prog = it->second.id();
+    glUseProgram(prog);
+    glProgramUniform2i(prog, glGetUniformLocation(prog, "origin"), origin, origin - r);
+    glProgramUniform2i(prog, glGetUniformLocation(prog, "extent"), width, height + 2 * r);
+    glBindTextureUnit(0, in.id());
+    glBindImageTexture(1, rows.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+    constexpr int kGroup = 8, kRun = 8;  // the shader's local size, outputs per invocation
+    glDispatchCompute(static_cast<GLuint>((width + kGroup * kRun - 1) / (kGroup * kRun)),
+                      static_cast<GLuint>((height + 2 * r + kGroup - 1) / kGroup), 1);
+    glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT);
+    glBindTextureUnit(1, rows.id());
+    return {};
   }
 
   // One pass: reads `in`, writes the `extent` texels of `out` from `origin` on.
+  // `run`: outputs per invocation down a column (window-rows operators: 8).
   void dispatch(GLuint prog, const StepUniforms& u, const GlTexture& in, const GlTexture& out,
-                int origin, int width, int height) {
+                int origin, int width, int height, int run) {
     glUseProgram(prog);
     glProgramUniform2i(prog, glGetUniformLocation(prog, "origin"), origin, origin);
     glProgramUniform2i(prog, glGetUniformLocation(prog, "extent"), width, height);
@@ -49,7 +80,7 @@ struct GpuProcessor::Impl {
     glBindImageTexture(0, out.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_R32F);
     constexpr int kGroup = 8;  // local_size of the shaders
     glDispatchCompute(static_cast<GLuint>((width + kGroup - 1) / kGroup),
-                      static_cast<GLuint>((height + kGroup - 1) / kGroup), 1);
+                      static_cast<GLuint>((height + kGroup * run - 1) / (kGroup * run)), 1);
     // The next pass samples what this one stored.
     glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_TEXTURE_UPDATE_BARRIER_BIT);
   }
@@ -109,9 +140,11 @@ Result<GpuTile> GpuProcessor::run_on_gpu(const OperatorChain& chain, const tiles
     } else {
       // A wavelet without a scale left (a coarse level) is the identity, as on the CPU.
       const std::string name = s.op->name == "wavelet" ? "identity" : s.op->name;
-      const GLuint prog = RELIEF_TRY(im.program(name));
-      im.dispatch(prog, step_uniforms(s, stats ? *stats : no_stats), *in, *out, consumed + m,
-                  w - 2 * (consumed + m), h - 2 * (consumed + m));
+      const StepUniforms u = step_uniforms(s, stats ? *stats : no_stats);
+      const GLuint prog = RELIEF_TRY(im.program(name, u.r));
+      const int o = consumed + m, ow = w - 2 * o, oh = h - 2 * o;
+      if (uses_window_rows(name)) RELIEF_CHECK(im.window_rows(u.r, *in, o, ow, oh));
+      im.dispatch(prog, u, *in, *out, o, ow, oh, uses_window_rows(name) ? 8 : 1);
     }
     consumed += m;
     std::swap(in, out);

@@ -13,10 +13,10 @@ double gauss_level(ivec2 p, int q) {
   for (int dx = -q; dx <= q; ++dx) {
     precise double cs = 0.0LF, cw = 0.0LF;
     for (int dy = -q; dy <= q; ++dy) {
-      float v = at(p + ivec2(dx, dy));
-      if (nodata(v)) continue;
-      cs += w[o + dy + q] * double(v);
-      cw += w[o + dy + q];
+      float v = at(p + ivec2(dx, dy));  // selects, not branches (kWindowStats)
+      double wv = nodata(v) ? 0.0LF : w[o + dy + q];
+      cs += wv * (nodata(v) ? 0.0LF : double(v));
+      cw += wv;
     }
     s += w[o + dx + q] * cs;
     ws += w[o + dx + q] * cw;
@@ -79,10 +79,9 @@ float apply(ivec2 p) {
   int s = 0;
   for (int dy = -r; dy <= r; ++dy) {
     for (int dx = -r; dx <= r; ++dx, ++s) {
-      float u = at(p + ivec2(dx, dy));
-      if (nodata(u)) continue;
-      double l = log_amplitude(u);
-      double wt = w[s] * range_weight(l - centre);
+      float u = at(p + ivec2(dx, dy));  // selects, not branches (kWindowStats)
+      double l = nodata(u) ? centre : log_amplitude(u);
+      double wt = nodata(u) ? 0.0LF : w[s] * range_weight(l - centre);
       sum += wt * l;
       weight += wt;
     }

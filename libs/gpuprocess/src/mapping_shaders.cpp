@@ -28,7 +28,13 @@ void add_point_shaders(ShaderBodies& bodies) {
       {"db-to-amplitude", point("return dexp(a / 20.0LF * kLn10);")},
       {"amplitude-to-db", point("return a > 0.0LF ? 20.0LF * dlog10(a) : double(nan_f());")},
       // Global mappings; k as step_uniforms() sets it.
-      {"linear", mapping("return a / k[0];")},
+      // Single precision: a / t is correctly rounded in float too (t rounded
+      // to float first: within 2 ulp of the CPU's double quotient rounded).
+      {"linear",
+       "float apply(ivec2 p) {\n"
+       "  float a = at(p);\n"
+       "  return nodata(a) ? a : clamp(a / float(k[0]), 0.0, 1.0);\n"
+       "}\n"},
       {"log", mapping("double x = clamp01((a - k[0]) / k[1]);\n"
                       "return dlog1p(k[2] * x) / k[3];")},
       {"gamma", mapping("return dpow(max(0.0LF, a) / k[1], k[0]);")},

@@ -46,10 +46,24 @@ double tumblin_gamma(double luminance) {
 
 }  // namespace
 
-std::string operator_shader(const std::string& name) {
+std::string operator_shader(const std::string& name, int radius) {
   auto it = bodies().find(name);
   if (it == bodies().end()) return {};
-  return shader_frame() + shader_math() + shader_main() + it->second;
+  // Window-rows operators have their own main() (runs of outputs).
+  const std::string main = uses_window_rows(name) ? std::string() : shader_main();
+  std::string t = shader_frame() + shader_math() + main + it->second;
+  if (radius >= 0) {
+    with_radius(t, radius);
+    with_runs(t, radius);
+  }
+  return t;
+}
+
+void with_radius(std::string& source, int radius) {
+  const std::string uniform = "uniform int r;";
+  const size_t at = source.find(uniform);
+  assert(at != std::string::npos);
+  source.replace(at, uniform.size(), "const int r = " + std::to_string(radius) + ";");
 }
 
 StepUniforms step_uniforms(const ChainStep& step, const process::GlobalStats& g) {

@@ -9,6 +9,7 @@
 
 #include <fmt/format.h>
 
+#include "cpu_layer_processing.h"
 #include "gl_backend.h"
 #include "quad_records.h"
 #include "shaders.h"
@@ -119,6 +120,10 @@ class GlTerrainRenderer final : public TerrainRenderer {
     if (layers.empty()) return {};
     gpu_ = RELIEF_TRY(gpuprocess::GpuProcessor::create());
     compositor_ = RELIEF_TRY(gpuprocess::Compositor::create());
+    const char* name = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
+    const std::string renderer = name ? name : "";
+    software_ = renderer.find("llvmpipe") != std::string::npos ||
+                renderer.find("softpipe") != std::string::npos;
     for (size_t i = 0; i < layers.size(); ++i) {
       if (layers[i].store->manifest().max_level > layers[reference_].store->manifest().max_level) {
         reference_ = i;
@@ -147,6 +152,7 @@ class GlTerrainRenderer final : public TerrainRenderer {
     }
     layers_ = std::move(layers);
     ++version_;  // composites of the old parameters are never drawn again
+    if (cpu_) cpu_->drop_before(version_);
     return {};
   }
 
@@ -256,6 +262,8 @@ class GlTerrainRenderer final : public TerrainRenderer {
     gl::Uploads uploads;
     slots_.begin_frame();
     made_this_frame_ = 0;
+    processed_this_frame_ = 0;
+    if (cpu_) cpu_->begin_frame();
     const uint64_t uploads_before = slots_.uploads(), evicted_before = slots_.evicted();
     const lod::MeshTopology& mesh = elevation_.mesh();
     records_.clear();
@@ -514,9 +522,25 @@ class GlTerrainRenderer final : public TerrainRenderer {
     }
     made.empty = !any;
     if (!any || missing) return made;
-    // Interactive frames do not wait for processing either: past a few
-    // composites, the rest are made by the next frames (ancestors meanwhile).
-    if (interactive && made_this_frame_ >= kCompositesPerFrame) return made;
+    // Layers processed on the CPU: their results, or the jobs submitted.
+    std::vector<lod::TilePtr> processed(layers_.size());
+    bool pending = false;
+    for (size_t i = 0; i < layers_.size(); ++i) {
+      if (!tiles[i] || !on_cpu(layers_[i])) continue;
+      processed[i] = RELIEF_TRY(process_on_cpu(i, keys[i], tiles[i], priority));
+      pending = pending || !processed[i];
+    }
+    if (pending) return made;  // an ancestor's composite meanwhile
+    // Interactive frames do not wait for processing either: past a budget of
+    // processing time, the rest are made by the next frames (ancestors
+    // meanwhile). A time budget, not a count: cheap chains finish a view in
+    // one frame, costly ones keep frames short.
+    if (interactive && made_this_frame_ > 0 && processed_this_frame_ >= kProcessingPerFrame) {
+      return made;
+    }
+    // What the GL still has to do first (llvmpipe rasterises the previous
+    // frame's draws when something waits for them) is not processing.
+    if (made_this_frame_ == 0) glFinish();
     ++made_this_frame_;
     const auto start = Clock::now();
     const tiles::Store& ref = *layers_[reference_].store;
@@ -549,6 +573,11 @@ class GlTerrainRenderer final : public TerrainRenderer {
       c.tile = tiles[i].get();
       c.border = man.border;
       c.chain = &chains[i];
+      if (processed[i]) {  // the chain ran on the CPU: the result, as it is
+        c.tile = processed[i].get();
+        c.border = 1;
+        c.chain = nullptr;
+      }
       c.stats = &global[i];
       c.range_min = l.range_min, c.range_max = l.range_max;
       c.colormap = l.colormap;
@@ -560,25 +589,64 @@ class GlTerrainRenderer final : public TerrainRenderer {
       ++stats.layer_tiles_processed;
     }
     RELIEF_CHECK(compositor_->composite(*gpu_, inputs, slots_.imagery().id(), slot, width, height));
+    for (size_t i = 0; i < layers_.size(); ++i) {
+      if (processed[i] && cpu_) cpu_->forget({i, keys[i], version_});
+    }
     glFinish();  // what processing costs, apart from drawing
-    stats.processing_seconds += std::chrono::duration<double>(Clock::now() - start).count();
+    const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
+    stats.processing_seconds += seconds;
+    processed_this_frame_ += seconds;
     made.layer = slot;
     return made;
   }
 
-  static constexpr int kMaxGridK = 11;            // 4097 x 2049 vertices per grid
-  static constexpr int kCompositesPerFrame = 16;  // interactive frames
+  // Whether layer l's chain runs on the CPU (ProcessOn).
+  bool on_cpu(const TextureLayer& l) const {
+    if (l.chain.steps.empty() || !l.lenses.empty()) return false;
+    return l.process_on == ProcessOn::cpu || (l.process_on == ProcessOn::automatic && software_);
+  }
+
+  // Layer i's tile `key` through its chain on the CPU: for stills now (every
+  // core), for interactive frames by the workers (null until done).
+  Result<lod::TilePtr> process_on_cpu(size_t i, const TileKey& key, const lod::TilePtr& tile,
+                                      double priority) {
+    const TextureLayer& l = layers_[i];
+    const tiles::Manifest& man = l.store->manifest();
+    CpuLayerProcessing::Job job;
+    job.chain = gpuprocess::scale_chain(l.chain, std::ldexp(1.0, man.max_level - key.level));
+    job.tile = tile;
+    job.border = man.border;
+    job.stats = {man.stats.min, man.stats.max, man.stats.mean, man.stats.stddev};
+    job.priority = priority;
+    if (l.tiles->blocking()) {
+      ThreadExecutor executor;
+      auto out = gpuprocess::run_chain_cpu(job.chain, *tile, job.border, &job.stats, executor);
+      if (!out) return fail(out.error().message);
+      return std::make_shared<const tiles::Raster>(std::move(*out));
+    }
+    if (!cpu_) cpu_ = std::make_unique<CpuLayerProcessing>(0);
+    return cpu_->get_or_submit({i, key, version_}, std::move(job));
+  }
+
+  static constexpr int kMaxGridK = 11;  // 4097 x 2049 vertices per grid
+  // Seconds of processing per interactive frame: the latency issue 14 asks
+  // of a parameter change (100 ms), so a view whose processing fits is
+  // complete in the first frame after the change.
+  static constexpr double kProcessingPerFrame = 0.1;
 
   lod::TerrainModel& elevation_;
   const tiles::Store* imagery_;
   std::unique_ptr<lod::TileProvider> owned_imagery_tiles_;
   std::vector<TextureLayer> layers_;  // texture layers, bottom first
   std::vector<std::unique_ptr<lod::TileProvider>> owned_layer_tiles_;
-  size_t reference_ = 0;     // the layer whose tiles the composites follow
-  uint32_t version_ = 0;     // of the layers' parameters
-  int made_this_frame_ = 0;  // composites made by the frame being prepared
+  size_t reference_ = 0;             // the layer whose tiles the composites follow
+  uint32_t version_ = 0;             // of the layers' parameters
+  int made_this_frame_ = 0;          // composites made by the frame being prepared
+  double processed_this_frame_ = 0;  // and the seconds they took
   std::unique_ptr<gpuprocess::GpuProcessor> gpu_;
   std::unique_ptr<gpuprocess::Compositor> compositor_;
+  bool software_ = false;  // llvmpipe or softpipe: ProcessOn::automatic is the CPU
+  std::unique_ptr<CpuLayerProcessing> cpu_;  // workers, on first use
   lod::TileProvider* imagery_tiles_ = nullptr;
   size_t max_quads_;  // records in a buffer texture
   gl::Program program_, capture_program_;
@@ -628,6 +696,25 @@ Result<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(lod::TerrainMod
   RELIEF_CHECK(r->init());
   RELIEF_CHECK(r->init_layers(std::move(layers)));
   return std::unique_ptr<TerrainRenderer>(std::move(r));
+}
+
+Result<ProcessOn> parse_process_on(const std::string& name) {
+  if (name == "auto") return ProcessOn::automatic;
+  if (name == "gpu") return ProcessOn::gpu;
+  if (name == "cpu") return ProcessOn::cpu;
+  return fail(fmt::format("unknown processing backend '{}' (gpu, cpu, auto)", name));
+}
+
+const char* to_string(ProcessOn where) {
+  switch (where) {
+    case ProcessOn::gpu:
+      return "gpu";
+    case ProcessOn::cpu:
+      return "cpu";
+    case ProcessOn::automatic:
+      break;
+  }
+  return "auto";
 }
 
 Status check_texture_layer(const TextureLayer& l) {

@@ -14,6 +14,7 @@
 // Uses the GL context current on the calling thread; call from that thread only.
 #include <array>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "relief/base/result.h"
@@ -70,6 +71,17 @@ struct Lens {
   gpuprocess::OperatorChain chain;
 };
 
+// Where a single-band layer's chain runs (docs/gpu-processing.md, "Where
+// layers are processed"): on the GPU (GpuProcessor), or with the CPU
+// reference (run_chain_cpu) on worker threads, the result uploaded and then
+// mapped and composited on the GPU. Automatic: the CPU on a software
+// renderer (llvmpipe, softpipe: the CPU kernels are 4-25x faster there),
+// the GPU otherwise. Layers with lenses are processed on the GPU.
+enum class ProcessOn { automatic, gpu, cpu };
+// "auto", "gpu" or "cpu"; anything else is a one-line error.
+Result<ProcessOn> parse_process_on(const std::string& name);
+const char* to_string(ProcessOn where);
+
 struct TextureLayer {
   const tiles::Store* store = nullptr;
   // Where tiles come from: a non-blocking provider for interactive frames
@@ -83,6 +95,7 @@ struct TextureLayer {
   gpuprocess::ColorMap colormap = gpuprocess::ColorMap::grey;
   float opacity = 1;
   std::vector<Lens> lenses;  // single-band layers
+  ProcessOn process_on = ProcessOn::automatic;
 };
 
 // Whether a layer can be drawn: chain valid for the store (kind, border,
