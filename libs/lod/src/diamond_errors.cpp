@@ -92,6 +92,23 @@ double diamond_error(const MarkGrid& grid, const std::vector<float>& fm, GridPoi
   return worst;
 }
 
+// diamond_error of an axis diamond of s = 2 in closed form: its full-mesh
+// vertices are its centre, the ends and apexes (the triangles' vertices) and
+// the midpoints of its legs, where the triangles are the legs' means.
+double small_axis_error(const MarkGrid& grid, const std::vector<float>& fm, GridPoint c,
+                        const Diamond& d) {
+  auto at = [&](GridPoint p) { return double{fm[grid.id(p)]}; };
+  double worst = std::abs(0.5 * (at(d.ends[0]) + at(d.ends[1])) - at(c));
+  for (const GridPoint& a : d.apexes) {
+    if (!grid.inside(a)) continue;
+    for (const GridPoint& e : d.ends) {
+      const GridPoint m{(a.x + e.x) / 2, (a.y + e.y) / 2};
+      worst = std::max(worst, std::abs(0.5 * (at(e) + at(a)) - at(m)));
+    }
+  }
+  return worst;
+}
+
 float round_up(double v) {
   float f = static_cast<float>(v);
   if (static_cast<double>(f) < v) f = std::nextafter(f, INFINITY);
@@ -131,7 +148,8 @@ DiamondErrors measure_diamonds(const MarkGrid& grid, const tiles::Raster& tile, 
   for (int c = 1; c < grid.classes(); ++c) {
     grid.for_each_in_class(c, [&](GridPoint centre) {
       const Diamond d = grid.diamond(centre);
-      float error = round_up(diamond_error(grid, fm, centre, d));
+      float error = round_up(c == 1 ? small_axis_error(grid, fm, centre, d)
+                                    : diamond_error(grid, fm, centre, d));
       // Saturated: the children (class c - 1) inside the grid. Their areas
       // cover the part of this diamond inside the grid (its two triangles, or
       // the inner one on the border, are their four, or two, triangles), so
