@@ -195,12 +195,13 @@ struct Located {
 class Refiner {
  public:
   Refiner(const View& view, TerrainModel& terrain, const Selection& selection,
-          const RefineOptions& options, RefineCache::Impl& cache)
+          const RefineOptions& options, RefineCache::Impl& cache, MarkBlocks& marks)
       : view_(view),
         terrain_(terrain),
         selection_(selection),
         o_(options),
         cache_(cache),
+        marks_(marks),
         grid_(grid_of(terrain)),
         top_down_(options.variant == RefineVariant::kTopDown) {}
 
@@ -614,11 +615,11 @@ class Refiner {
   const Selection& selection_;
   const RefineOptions& o_;
   RefineCache::Impl& cache_;
+  MarkBlocks& marks_;
   MarkGrid grid_;
   int deepest_ = 0;
   int64_t globe_width_ = 0;
   std::vector<Quad> quads_;
-  MarkBlocks marks_;
   std::vector<std::vector<SinCos>> steps_;  // Quad::steps by level
   bool top_down_;
   std::vector<Located> stack_, work_;
@@ -641,7 +642,9 @@ Result<RefinedMesh> refine(const View& view, TerrainModel& terrain, const Select
   const double cpu_start = thread_cpu_seconds();
   RefineCache local(0);
   RefineCache& cache = options.cache ? *options.cache : local;
-  Refiner r(view, terrain, selection, options, cache.impl());
+  // The marks' blocks stay with the thread for its next frame.
+  thread_local MarkBlocks marks;
+  Refiner r(view, terrain, selection, options, cache.impl(), marks);
   RELIEF_CHECK(r.prepare());
   if (options.variant == RefineVariant::kTopDown) {
     r.top_down();
