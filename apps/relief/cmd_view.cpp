@@ -165,7 +165,12 @@ nlohmann::json stats_json(const window::ViewerSummary& s, const std::string& ren
                       {"triangles", f.triangles},
                       {"triangles_per_pixel", f.triangles_per_pixel},
                       {"uploaded_bytes", f.uploaded_bytes},
-                      {"complete", f.complete}});
+                      {"complete", f.complete},
+                      {"refine",
+                       {{"ms", f.refine_ms},
+                        {"cpu_ms", f.refine_cpu_ms},
+                        {"marks_evaluated", f.marks_evaluated}}},
+                      {"process_cpu_ms", f.process_cpu_ms}});
   }
   auto fps = [](double ms) { return ms > 0 ? 1e3 / ms : 0.0; };
   nlohmann::json summary = {{"frames", s.frames},

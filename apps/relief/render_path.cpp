@@ -105,6 +105,7 @@ Result<PathOptions> parse_path_options(const Args& args) {
 json refine_json(const view::FrameReport& r) {
   const lod::RefineStats& s = *r.refine;
   return {{"ms", s.seconds * 1e3},
+          {"cpu_ms", s.cpu_seconds * 1e3},
           {"marks_evaluated", s.marks_evaluated},
           {"tiles_measured", s.tiles_measured},
           {"tiles_prepared", s.tiles_prepared},

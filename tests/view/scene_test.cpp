@@ -130,6 +130,47 @@ TEST_F(SceneTest, InteractiveFramesRefineWithDiamondErrorsPreparedOffTheRenderTh
             complete->last_refined()->stats.marks_evaluated);
 }
 
+// The loader's threads of an edge-mark scene measure the diamond errors, not
+// the quads' exact errors, which only the quad mode's selection asks for: a
+// frame that asks measures them itself; a quad-mode scene finds them prepared.
+TEST_F(SceneTest, EdgeMarkScenesLeaveTheQuadsExactErrorsToWhoeverAsks) {
+  for (const lod::LodMode mode : {lod::LodMode::edge_marks, lod::LodMode::quads}) {
+    SCOPED_TRACE(mode == lod::LodMode::quads ? "quads" : "edge marks");
+    auto live = scene(true, mode);
+    ASSERT_TRUE(live);
+    std::optional<FrameReport> last;
+    for (int frame = 0; frame < 64 && !(last && last->complete); ++frame) {
+      if (frame > 0) wait_idle(*live);
+      auto f = live->draw(kOblique, *target_);
+      ASSERT_TRUE(f) << f.error().message;
+      last = *f;
+    }
+    ASSERT_TRUE(last && last->complete);
+    lod::TerrainModel& terrain = live->terrain();
+    if (mode == lod::LodMode::quads) {
+      EXPECT_GT(terrain.error_counts().prepared, 0u);  // (level 0, read at creation: inline)
+      continue;
+    }
+    EXPECT_EQ(terrain.error_counts().prepared + terrain.error_counts().measured, 0u);
+    // A drawn quad of the store's finest level, its tile and its parent's resident.
+    std::optional<geo::TileKey> key;
+    for (const lod::SelectedQuad& q : live->last_selection().quads) {
+      if (q.key.level == terrain.data_max_level() && terrain.available(q.key) &&
+          terrain.available(*q.key.parent())) {
+        key = q.key;
+        break;
+      }
+    }
+    ASSERT_TRUE(key);
+    auto info = terrain.quad(*key);
+    ASSERT_TRUE(info) << info.error().message;
+    auto error = terrain.quad_error(*key, **info);
+    ASSERT_TRUE(error) << error.error().message;
+    EXPECT_EQ(terrain.error_counts().prepared, 0u);
+    EXPECT_EQ(terrain.error_counts().measured, 1u);
+  }
+}
+
 // Elevation layers fused at draw time (pipeline/fused_elevation.h): the
 // loader's threads fuse each tile and hand the fused raster to the
 // refinement's hook, so interactive frames refine with diamond errors of the

@@ -26,6 +26,95 @@ struct TrianglePlane {
   double at(int32_t x, int32_t y) const { return ha + gx * (x - a.x) + gy * (y - a.y); }
 };
 
+// The largest |plane - full mesh| over the full-mesh vertices (x + y even)
+// of row y from x = from to x = to.
+double row_error(const TrianglePlane& plane, const float* row, int32_t y, int32_t from,
+                 int32_t to) {
+  // Two maxima in turn: independent chains of comparisons.
+  double even = 0, odd = 0;
+  const double base = plane.ha + plane.gy * (y - plane.a.y);
+  int32_t x = from + ((from + y) & 1);
+  for (; x + 2 <= to; x += 4) {
+    even = std::max(even, std::abs(base + plane.gx * (x - plane.a.x) - row[x]));
+    odd = std::max(odd, std::abs(base + plane.gx * (x + 2 - plane.a.x) - row[x + 2]));
+  }
+  if (x <= to) even = std::max(even, std::abs(base + plane.gx * (x - plane.a.x) - row[x]));
+  return std::max(even, odd);
+}
+
+// max |D's two triangles - full mesh| over the full mesh's vertices in
+// diamond d of centre c (the part inside the grid). A point belongs to the
+// triangle on its side of the hypotenuse (on it, to the first if that one is
+// inside the grid); rows are cut where the hypotenuse crosses them instead
+// of testing every point.
+double diamond_error(const MarkGrid& grid, const std::vector<float>& fm, GridPoint c,
+                     const Diamond& d) {
+  const GridPoint e0 = d.ends[0], e1 = d.ends[1];
+  const double h0 = fm[grid.id(e0)], h1 = fm[grid.id(e1)];
+  const int64_t side0 = cross(e0, e1, d.apexes[0]);
+  // The triangles' planes (an apex outside the grid: never used).
+  auto plane_of = [&](GridPoint a) {
+    return grid.inside(a) ? TrianglePlane(a, e0, e1, fm[grid.id(a)], h0, h1)
+                          : TrianglePlane(e0, e1, a, h0, h1, 0);
+  };
+  const TrianglePlane planes[2] = {plane_of(d.apexes[0]), plane_of(d.apexes[1])};
+  const TrianglePlane& on_line = planes[grid.inside(d.apexes[0]) ? 0 : 1];
+  // The plane of the points strictly on p's side of the hypotenuse.
+  auto side_of = [&](GridPoint p) -> const TrianglePlane& {
+    return (cross(e0, e1, p) > 0) == (side0 > 0) ? planes[0] : planes[1];
+  };
+  const int32_t r = d.size;
+  const int32_t x0 = std::max(0, c.x - r), x1 = std::min(2 * grid.n(), c.x + r);
+  const int32_t y0 = std::max(0, c.y - r), y1 = std::min(grid.n(), c.y + r);
+  const bool diagonal = d.kind == MarkKind::kDiagonal;
+  // Diagonals: the hypotenuse runs along x - c.x = y - c.y, or = c.y - y.
+  const bool main_diagonal = (e1.x - e0.x) * (e1.y - e0.y) > 0;
+  double worst = 0;
+  for (int32_t y = y0; y <= y1; ++y) {
+    const int32_t dy = y - c.y;
+    // Axis diamonds: the points within L1 distance r of the centre.
+    const int32_t reach = diagonal ? r : r - std::abs(dy);
+    const int32_t xa = std::max(x0, c.x - reach), xb = std::min(x1, c.x + reach);
+    const float* row = &fm[grid.id({0, y})];
+    if (d.kind == MarkKind::kAxisX) {  // a row wholly on one side, or the hypotenuse
+      worst = std::max(worst, row_error(dy == 0 ? on_line : side_of({c.x, y}), row, y, xa, xb));
+      continue;
+    }
+    const int32_t xc = !diagonal ? c.x : main_diagonal ? c.x + dy : c.x - dy;
+    if (xa < xc)
+      worst = std::max(worst, row_error(side_of({xc - 1, y}), row, y, xa, std::min(xb, xc - 1)));
+    if (xa <= xc && xc <= xb && ((xc + y) & 1) == 0) {
+      worst = std::max(worst, std::abs(on_line.at(xc, y) - row[xc]));
+    }
+    if (xb > xc)
+      worst = std::max(worst, row_error(side_of({xc + 1, y}), row, y, std::max(xa, xc + 1), xb));
+  }
+  return worst;
+}
+
+// diamond_error of an axis diamond of s = 2 in closed form: its full-mesh
+// vertices are its centre, the ends and apexes (the triangles' vertices) and
+// the midpoints of its legs, where the triangles are the legs' means.
+double small_axis_error(const MarkGrid& grid, const std::vector<float>& fm, GridPoint c,
+                        const Diamond& d) {
+  auto at = [&](GridPoint p) { return double{fm[grid.id(p)]}; };
+  double worst = std::abs(0.5 * (at(d.ends[0]) + at(d.ends[1])) - at(c));
+  for (const GridPoint& a : d.apexes) {
+    if (!grid.inside(a)) continue;
+    for (const GridPoint& e : d.ends) {
+      const GridPoint m{(a.x + e.x) / 2, (a.y + e.y) / 2};
+      worst = std::max(worst, std::abs(0.5 * (at(e) + at(a)) - at(m)));
+    }
+  }
+  return worst;
+}
+
+float round_up(double v) {
+  float f = static_cast<float>(v);
+  if (static_cast<double>(f) < v) f = std::nextafter(f, INFINITY);
+  return f;
+}
+
 }  // namespace
 
 DiamondErrors measure_diamonds(const MarkGrid& grid, const tiles::Raster& tile, int border) {
@@ -39,59 +128,41 @@ DiamondErrors measure_diamonds(const MarkGrid& grid, const tiles::Raster& tile, 
     }
   }
   DiamondErrors out;
-  out.error.assign(count, 0.0f);
-  out.lo.assign(count, 0);
-  out.hi.assign(count, 0);
-  for (int c = 0; c < grid.classes(); ++c) {
+  out.at.assign(grid.slots(), DiamondError{});
+  // The finest diamonds (class 0, a sample cell around its centre): the
+  // cell's corners are the triangles' vertices, so the error is the centre's
+  // distance to the diagonal's midpoint; the heights are the five points'.
+  grid.for_each_in_class(0, [&](GridPoint centre) {
+    const Diamond d = grid.diamond(centre);
+    const uint32_t id = grid.id(centre), slot = grid.slot(centre);
+    const double mid = 0.5 * (double{fm[grid.id(d.ends[0])]} + double{fm[grid.id(d.ends[1])]});
+    out.at[slot].error = round_up(std::abs(mid - fm[id]));
+    float lo = fm[id], hi = fm[id];
+    for (const GridPoint& p : {d.ends[0], d.ends[1], d.apexes[0], d.apexes[1]}) {
+      lo = std::min(lo, fm[grid.id(p)]);
+      hi = std::max(hi, fm[grid.id(p)]);
+    }
+    out.at[slot].lo = static_cast<int16_t>(std::clamp(std::floor(lo), -32768.0f, 32767.0f));
+    out.at[slot].hi = static_cast<int16_t>(std::clamp(std::ceil(hi), -32768.0f, 32767.0f));
+  });
+  for (int c = 1; c < grid.classes(); ++c) {
     grid.for_each_in_class(c, [&](GridPoint centre) {
       const Diamond d = grid.diamond(centre);
-      const GridPoint e0 = d.ends[0], e1 = d.ends[1];
-      const double h0 = fm[grid.id(e0)], h1 = fm[grid.id(e1)];
-      const int64_t side0 = cross(e0, e1, d.apexes[0]);
-      // The triangles' planes (an apex outside the quad: never used).
-      auto plane_of = [&](GridPoint a) {
-        return grid.inside(a) ? TrianglePlane(a, e0, e1, fm[grid.id(a)], h0, h1)
-                              : TrianglePlane(e0, e1, a, h0, h1, 0);
-      };
-      const TrianglePlane planes[2] = {plane_of(d.apexes[0]), plane_of(d.apexes[1])};
-      const bool first_on_line = grid.inside(d.apexes[0]);
-      double worst = 0, lo = INFINITY, hi = -INFINITY;
-      const int32_t r = d.size;
-      const int32_t x0 = std::max(0, centre.x - r), x1 = std::min(2 * grid.n(), centre.x + r);
-      const int32_t y0 = std::max(0, centre.y - r), y1 = std::min(grid.n(), centre.y + r);
-      const bool diagonal = d.kind == MarkKind::kDiagonal;
-      for (int32_t y = y0; y <= y1; ++y) {
-        // Axis diamonds: the points within L1 distance r of the centre.
-        const int32_t reach = diagonal ? r : r - std::abs(y - centre.y);
-        int32_t xa = std::max(x0, centre.x - reach), xb = std::min(x1, centre.x + reach);
-        xa += (xa + y) & 1;  // full-mesh vertices: x + y even
-        const float* row = &fm[grid.id({0, y})];
-        for (int32_t x = xa; x <= xb; x += 2) {
-          const int64_t side = cross(e0, e1, GridPoint{x, y});
-          // The triangle holding the point; points on the hypotenuse take either.
-          const bool first = side == 0 ? first_on_line : (side > 0) == (side0 > 0);
-          const double v = row[x];
-          worst = std::max(worst, std::abs(planes[first ? 0 : 1].at(x, y) - v));
-          lo = std::min(lo, v);
-          hi = std::max(hi, v);
-        }
+      float error = round_up(c == 1 ? small_axis_error(grid, fm, centre, d)
+                                    : diamond_error(grid, fm, centre, d));
+      // Saturated: the children (class c - 1) inside the grid. Their areas
+      // cover the part of this diamond inside the grid (its two triangles, or
+      // the inner one on the border, are their four, or two, triangles), so
+      // the height range is theirs.
+      int16_t lo = INT16_MAX, hi = INT16_MIN;
+      for (const GridPoint& child : d.children(centre)) {
+        if (!grid.inside(child)) continue;
+        const uint32_t cid = grid.slot(child);
+        error = std::max(error, out.at[cid].error);
+        lo = std::min(lo, out.at[cid].lo);
+        hi = std::max(hi, out.at[cid].hi);
       }
-      const uint32_t id = grid.id(centre);
-      float error = static_cast<float>(worst);
-      if (static_cast<double>(error) < worst) error = std::nextafter(error, INFINITY);
-      int32_t ilo = static_cast<int32_t>(std::floor(lo)), ihi = static_cast<int32_t>(std::ceil(hi));
-      if (c > 0) {  // saturate: children of class c - 1 inside the quad
-        for (const GridPoint& child : d.children(centre)) {
-          if (!grid.inside(child)) continue;
-          const uint32_t cid = grid.id(child);
-          error = std::max(error, out.error[cid]);
-          ilo = std::min<int32_t>(ilo, out.lo[cid]);
-          ihi = std::max<int32_t>(ihi, out.hi[cid]);
-        }
-      }
-      out.error[id] = error;
-      out.lo[id] = static_cast<int16_t>(std::clamp(ilo, -32768, 32767));
-      out.hi[id] = static_cast<int16_t>(std::clamp(ihi, -32768, 32767));
+      out.at[grid.slot(centre)] = {error, lo, hi};
     });
   }
   return out;

@@ -27,10 +27,15 @@
 
 namespace relief::lod {
 
+struct DiamondError {
+  float error = 0;         // metres
+  int16_t lo = 0, hi = 0;  // metres
+};
+
 struct DiamondErrors {
-  std::vector<float> error;     // metres, by MarkGrid::id
-  std::vector<int16_t> lo, hi;  // metres
-  uint64_t bytes() const { return error.size() * (sizeof(float) + 2 * sizeof(int16_t)); }
+  // By MarkGrid::slot; together, as refinement reads them: one cache line.
+  std::vector<DiamondError> at;
+  uint64_t bytes() const { return at.size() * sizeof(DiamondError); }
 };
 
 // The errors of the diamonds of quad `key` (a quad of the store, level <=

@@ -1,6 +1,7 @@
 #include "edge_marks.h"
 
 #include <bit>
+#include <cassert>
 #include <cmath>
 
 #include "relief/lod/mesh_topology.h"
@@ -18,6 +19,41 @@ std::array<GridPoint, 4> Diamond::children(GridPoint) const {
     for (const GridPoint& a : apexes) out[i++] = {(e.x + a.x) / 2, (e.y + a.y) / 2};
   }
   return out;
+}
+
+MarkGrid::MarkGrid(int k) : k_(k), n_(1 << k) {
+  // Class 2j: diagonals of h = 2^j, (n / h) x (n / 2h) of them; class 2j - 1:
+  // axis diamonds of s = 2^j, (n / s) x (n / 2s + 1) with a horizontal
+  // hypotenuse and (n / s + 1) x (n / 2s) with a vertical one.
+  uint32_t total = 0;
+  for (int c = 0; c <= 2 * k - 2; ++c) {
+    offsets_[static_cast<size_t>(c)] = total;
+    const uint32_t n = static_cast<uint32_t>(n_);
+    if (c % 2 == 0) {
+      const uint32_t h = 1u << (c / 2);
+      total += (n / h) * (n / (2 * h));
+    } else {
+      const uint32_t s = 1u << (c / 2 + 1);
+      total += (n / s) * (n / (2 * s) + 1) + (n / s + 1) * (n / (2 * s));
+    }
+  }
+  offsets_[static_cast<size_t>(2 * k - 1)] = total;
+}
+
+uint32_t MarkGrid::slot(GridPoint c) const {
+  const int32_t bx = lowbit(c.x), by = lowbit(c.y);
+  const uint32_t n = static_cast<uint32_t>(n_);
+  const uint32_t x = static_cast<uint32_t>(c.x), y = static_cast<uint32_t>(c.y);
+  if (bx == by) {  // a diagonal: both coordinates odd multiples of h
+    const int j = std::countr_zero(static_cast<uint32_t>(bx));
+    return offsets_[static_cast<size_t>(2 * j)] + (y >> (j + 1)) * (n >> j) + (x >> (j + 1));
+  }
+  const int32_t s = std::min(bx, by);
+  const int j = std::countr_zero(static_cast<uint32_t>(s));
+  assert(j >= 1 && "a sample's side: never split, no slot");
+  const uint32_t first = offsets_[static_cast<size_t>(2 * j - 1)];
+  if (bx < by) return first + (y >> (j + 1)) * (n >> j) + (x >> (j + 1));  // horizontal
+  return first + ((n >> (j + 1)) + 1) * (n >> j) + (y >> (j + 1)) * ((n >> j) + 1) + (x >> (j + 1));
 }
 
 uint8_t MarkGrid::sides(GridPoint p) const {

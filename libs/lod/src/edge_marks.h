@@ -49,7 +49,7 @@ struct Diamond {
 
 class MarkGrid {
  public:
-  explicit MarkGrid(int k) : k_(k), n_(1 << k) {}
+  explicit MarkGrid(int k);
   int k() const { return k_; }
   int32_t n() const { return n_; }
   int32_t columns() const { return 2 * n_ + 1; }
@@ -93,10 +93,17 @@ class MarkGrid {
   // The class of a splittable, non-root diamond.
   static int class_of(const Diamond& d);
 
+  // Diamonds numbered class by class (the roots last), in row order within
+  // a class: what is stored per diamond, so that the coarse diamonds every
+  // frame visits first lie together in memory instead of one per grid row.
+  uint32_t slots() const { return offsets_[2 * k_ - 1]; }
+  uint32_t slot(GridPoint centre) const;
+
  private:
   int32_t lowbit(int32_t v) const { return v == 0 ? 4 * n_ : v & -v; }
   int k_;
   int32_t n_;
+  std::array<uint32_t, 64> offsets_{};  // the first slot of each class
 };
 
 }  // namespace relief::lod

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
+#include <ctime>
 #include <list>
 #include <mutex>
 #include <optional>
@@ -15,6 +16,8 @@
 
 #include "diamond_errors.h"
 #include "edge_marks.h"
+#include "mark_blocks.h"
+#include "relief/geo/ellipsoid.h"
 #include "relief/lod/screen_error.h"
 
 namespace relief::lod {
@@ -129,12 +132,11 @@ constexpr double kDegree = kPi / 180;
 // (6 399 594 m at the poles) plus the highest terrain: the chord between two
 // points at the same height is at most this times their angular distance.
 constexpr double kArc = 6.41e6;
+// Metres added to the radius of a diamond's ball for the rounding of its
+// centre's position (computed without trigonometric calls per diamond).
+constexpr double kRounding = 1e-3;
 constexpr uint8_t kUnknown = 0, kSplit = 1, kKept = 2;
 constexpr uint8_t kSideBits[4] = {kWest, kEast, kNorth, kSouth};
-
-struct FreeMarks {
-  void operator()(uint8_t* p) const { std::free(p); }
-};
 
 // Range maxima over the heights by which the vertices of one side move when
 // they take the coarser neighbour's data (a sparse table).
@@ -165,16 +167,24 @@ class SideMax {
   std::vector<std::vector<float>> table_;
 };
 
+struct SinCos {
+  double s = 0, c = 1;
+  explicit SinCos(double radians = 0) : s(std::sin(radians)), c(std::cos(radians)) {}
+};
+
 struct Quad {
   const SelectedQuad* selected = nullptr;
   int64_t ox = 0, oy = 0, scale = 1;  // in cells of the finest selected level
   geo::GeoBox bounds;
   double cell = 0;  // degrees per grid cell, along both axes
+  // The grid's directions without a sine per point: its west and north
+  // sides, and i cells (i = 0 .. 2n) of its level.
+  SinCos west, north;
+  const SinCos* steps = nullptr;
   double level_error = 0;
   std::shared_ptr<const DiamondErrors> errors;  // null: no data, height 0
-  std::unique_ptr<uint8_t[], FreeMarks> marks;
-  std::array<SideMax, 4> edge;  // west, east, north, south
-  uint8_t blocking = 0;         // Side bits: shared with a coarser selected quad
+  std::array<SideMax, 4> edge;                  // west, east, north, south
+  uint8_t blocking = 0;                         // Side bits: shared with a coarser selected quad
 };
 
 struct Located {
@@ -185,12 +195,13 @@ struct Located {
 class Refiner {
  public:
   Refiner(const View& view, TerrainModel& terrain, const Selection& selection,
-          const RefineOptions& options, RefineCache::Impl& cache)
+          const RefineOptions& options, RefineCache::Impl& cache, MarkBlocks& marks)
       : view_(view),
         terrain_(terrain),
         selection_(selection),
         o_(options),
         cache_(cache),
+        marks_(marks),
         grid_(grid_of(terrain)),
         top_down_(options.variant == RefineVariant::kTopDown) {}
 
@@ -213,8 +224,9 @@ class Refiner {
     deepest_ = deepest;
     globe_width_ = int64_t{2} * grid_.n() << deepest;
     quads_.resize(selection_.quads.size());
+    marks_.reset(grid_, quads_.size());
     for (size_t i = 0; i < quads_.size(); ++i)
-      RELIEF_CHECK(prepare(selection_.quads[i], quads_[i]));
+      RELIEF_CHECK(prepare(static_cast<int>(i), selection_.quads[i], quads_[i]));
     // A side shared with finer quads is split at its midpoint (their corner).
     for (size_t i = 0; i < quads_.size(); ++i) {
       const uint8_t finer = selection_.quads[i].finer_sides;
@@ -286,9 +298,9 @@ class Refiner {
 
  private:
   int level(int q) const { return selection_.quads[static_cast<size_t>(q)].key.level; }
-  uint8_t& mark(int q, GridPoint p) { return quads_[static_cast<size_t>(q)].marks[grid_.id(p)]; }
+  uint8_t& mark(int q, GridPoint p) { return marks_.at(q, p); }
 
-  Status prepare(const SelectedQuad& s, Quad& q) {
+  Status prepare(int index, const SelectedQuad& s, Quad& q) {
     const int32_t n = grid_.n();
     q.selected = &s;
     q.scale = int64_t{1} << (deepest_ - s.key.level);
@@ -296,6 +308,15 @@ class Refiner {
     q.oy = int64_t{s.key.y} * n * q.scale;
     q.bounds = s.key.bounds();
     q.cell = q.bounds.height() / n;
+    q.west = SinCos(q.bounds.west * kDegree);
+    q.north = SinCos(q.bounds.north * kDegree);
+    if (steps_.size() <= static_cast<size_t>(s.key.level)) steps_.resize(s.key.level + 1);
+    std::vector<SinCos>& steps = steps_[static_cast<size_t>(s.key.level)];
+    if (steps.empty()) {
+      steps.reserve(static_cast<size_t>(2 * n + 1));
+      for (int32_t i = 0; i <= 2 * n; ++i) steps.emplace_back(i * q.cell * kDegree);
+    }
+    q.steps = steps.data();
     q.level_error = RELIEF_TRY(terrain_.level_error(s.key));
     if (q.level_error > 0) {
       // No split makes up for the distance between the level's full mesh
@@ -315,19 +336,21 @@ class Refiner {
     if (const DataWindow w = terrain_.window(s.key); w.tile) {
       q.errors = RELIEF_TRY(cache_.get(terrain_, grid_, *w.tile, stats_));
     }
-    q.marks.reset(static_cast<uint8_t*>(std::calloc(grid_.count(), 1)));
-    if (!q.marks) return fail("refine: out of memory for edge marks");
     for (int32_t x : {0, n, 2 * n}) {  // the halves' corners and centres
-      q.marks[grid_.id({x, 0})] = q.marks[grid_.id({x, n})] = kSplit;
+      mark(index, {x, 0}) = mark(index, {x, n}) = kSplit;
     }
-    q.marks[grid_.id({n / 2, n / 2})] = q.marks[grid_.id({3 * n / 2, n / 2})] = kSplit;
+    mark(index, {n / 2, n / 2}) = mark(index, {3 * n / 2, n / 2}) = kSplit;
     return prepare_edges(s, q);
   }
 
-  // Height of grid point p from a data window (0 without data).
-  Result<double> height(const DataWindow& w, GridPoint p) {
-    if (!w.tile) return 0.0;
-    const TerrainModel::TilePtr t = RELIEF_TRY(terrain_.tile(*w.tile));
+  // The tile of a data window (null without data).
+  Result<TerrainModel::TilePtr> tile_of(const DataWindow& w) {
+    if (!w.tile) return TerrainModel::TilePtr{};
+    return terrain_.tile(*w.tile);
+  }
+
+  // Height of grid point p from a data window and its tile (0 without data).
+  double height(const DataWindow& w, const TerrainModel::TilePtr& t, GridPoint p) const {
     if (!t) return 0.0;
     const double u = static_cast<double>(p.x) / (2 * grid_.n());
     const double v = static_cast<double>(p.y) / grid_.n();
@@ -340,6 +363,8 @@ class Refiner {
     if (!s.coarse_sides && !s.coarse_corners) return {};
     const int32_t n = grid_.n();
     const DataWindow own = terrain_.window(s.key), parent = terrain_.parent_window(s.key);
+    const TerrainModel::TilePtr own_tile = RELIEF_TRY(tile_of(own));
+    const TerrainModel::TilePtr parent_tile = RELIEF_TRY(tile_of(parent));
     auto at = [&](int side, int32_t t) {
       return side == 0   ? GridPoint{0, t}
              : side == 1 ? GridPoint{2 * n, t}
@@ -347,8 +372,8 @@ class Refiner {
                          : GridPoint{t, n};
     };
     std::array<std::vector<float>, 4> diff;
-    auto moved = [&](GridPoint p) -> Result<float> {
-      const double d = RELIEF_TRY(height(parent, p)) - RELIEF_TRY(height(own, p));
+    auto moved = [&](GridPoint p) {
+      const double d = height(parent, parent_tile, p) - height(own, own_tile, p);
       float f = static_cast<float>(std::abs(d));
       if (static_cast<double>(f) < std::abs(d)) f = std::nextafter(f, INFINITY);
       return f;
@@ -357,7 +382,7 @@ class Refiner {
       const int32_t length = side < 2 ? n : 2 * n;
       diff[side].assign(static_cast<size_t>(length) + 1, 0.0f);
       if (!(s.coarse_sides & kSideBits[side])) continue;
-      for (int32_t t = 0; t <= length; t += 2) diff[side][t] = RELIEF_TRY(moved(at(side, t)));
+      for (int32_t t = 0; t <= length; t += 2) diff[side][t] = moved(at(side, t));
     }
     const struct {
       uint8_t corner;
@@ -371,7 +396,7 @@ class Refiner {
     uint8_t used = s.coarse_sides;
     for (const auto& c : corners) {
       if (!(s.coarse_corners & c.corner)) continue;
-      const float d = RELIEF_TRY(moved(c.p));
+      const float d = moved(c.p);
       for (int k = 0; k < 2; ++k) {
         diff[c.sides[k]][c.t[k]] = std::max(diff[c.sides[k]][c.t[k]], d);
         used |= kSideBits[c.sides[k]];
@@ -489,10 +514,10 @@ class Refiner {
     const int32_t n = grid_.n();
     double error = 0, lo = 0, hi = 0;
     if (quad.errors) {
-      const uint32_t id = grid_.id(p);
-      error = quad.errors->error[id];
-      lo = quad.errors->lo[id];
-      hi = quad.errors->hi[id];
+      const DiamondError& e = quad.errors->at[grid_.slot(p)];
+      error = e.error;
+      lo = e.lo;
+      hi = e.hi;
     }
     const int32_t r = d.reach();
     double edge = 0;
@@ -511,8 +536,20 @@ class Refiner {
                  lat = quad.bounds.north - p.y * quad.cell;
     const geo::GeoBox area{lon - r * quad.cell, lat - r * quad.cell, lon + r * quad.cell,
                            lat + r * quad.cell};
-    const double radius = kArc * std::sqrt(2.0) * r * quad.cell * kDegree + (hi - lo) / 2 + pad;
-    const Vec3 c = ecef(lon, lat, (lo + hi) / 2);
+    // The centre's ECEF position (geo::to_ecef's) from the grid's directions
+    // by the angle sums, up to rounding: nanometres, in kRounding.
+    const SinCos &x = quad.steps[p.x], &y = quad.steps[p.y];
+    const double sin_lon = quad.west.s * x.c + quad.west.c * x.s;
+    const double cos_lon = quad.west.c * x.c - quad.west.s * x.s;
+    const double sin_lat = quad.north.s * y.c - quad.north.c * y.s;
+    const double cos_lat = quad.north.c * y.c + quad.north.s * y.s;
+    const double h = (lo + hi) / 2;
+    const double normal = geo::wgs84::kSemiMajorAxis /
+                          std::sqrt(1 - geo::wgs84::kFirstEccentricitySquared * sin_lat * sin_lat);
+    const Vec3 c{(normal + h) * cos_lat * cos_lon, (normal + h) * cos_lat * sin_lon,
+                 (normal * (1 - geo::wgs84::kFirstEccentricitySquared) + h) * sin_lat};
+    const double radius =
+        kArc * std::sqrt(2.0) * r * quad.cell * kDegree + (hi - lo) / 2 + pad + kRounding;
     // Most diamonds are far below the threshold: the distance bound of
     // vertical_error_pixels, from a nearer point than the box's, settles them.
     const double near = length(c - view_.eye) - std::sqrt(3.0) * radius;
@@ -556,13 +593,13 @@ class Refiner {
       if (other) want_split_across(other->quad, other->p, grid_.diamond(other->p));
     }
     m = kKept;
-    if (other && mark(other->quad, other->p) == kUnknown) mark(other->quad, other->p) = kKept;
+    if (other && marks_.get(other->quad, other->p) == kUnknown) mark(other->quad, other->p) = kKept;
   }
 
   // The triangle with right angle at r and hypotenuse (a, b), or its children.
   void emit(int q, GridPoint r, GridPoint a, GridPoint b, std::vector<uint32_t>& out) {
     const GridPoint m{(a.x + b.x) / 2, (a.y + b.y) / 2};
-    if (mark(q, m) == kSplit && MarkGrid::splittable(grid_.diamond(m))) {
+    if (marks_.get(q, m) == kSplit && MarkGrid::splittable(grid_.diamond(m))) {
       emit(q, m, a, r, out);
       emit(q, m, r, b, out);
       return;
@@ -578,10 +615,12 @@ class Refiner {
   const Selection& selection_;
   const RefineOptions& o_;
   RefineCache::Impl& cache_;
+  MarkBlocks& marks_;
   MarkGrid grid_;
   int deepest_ = 0;
   int64_t globe_width_ = 0;
   std::vector<Quad> quads_;
+  std::vector<std::vector<SinCos>> steps_;  // Quad::steps by level
   bool top_down_;
   std::vector<Located> stack_, work_;
   RefineStats stats_;
@@ -589,12 +628,23 @@ class Refiner {
 
 }  // namespace
 
+namespace {
+double thread_cpu_seconds() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + static_cast<double>(t.tv_nsec) * 1e-9;
+}
+}  // namespace
+
 Result<RefinedMesh> refine(const View& view, TerrainModel& terrain, const Selection& selection,
                            const RefineOptions& options) {
   const auto start = std::chrono::steady_clock::now();
+  const double cpu_start = thread_cpu_seconds();
   RefineCache local(0);
   RefineCache& cache = options.cache ? *options.cache : local;
-  Refiner r(view, terrain, selection, options, cache.impl());
+  // The marks' blocks stay with the thread for its next frame.
+  thread_local MarkBlocks marks;
+  Refiner r(view, terrain, selection, options, cache.impl(), marks);
   RELIEF_CHECK(r.prepare());
   if (options.variant == RefineVariant::kTopDown) {
     r.top_down();
@@ -604,6 +654,7 @@ Result<RefinedMesh> refine(const View& view, TerrainModel& terrain, const Select
   RefinedMesh mesh = r.mesh();
   mesh.stats.seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  mesh.stats.cpu_seconds = thread_cpu_seconds() - cpu_start;
   return mesh;
 }
 

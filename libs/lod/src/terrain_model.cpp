@@ -349,10 +349,16 @@ void TerrainModel::add_prepare(TileProvider::Prepare prepare) {
   install_prepare();
 }
 
+void TerrainModel::skip_exact_errors_on_load() {
+  if (!prepared_) return;
+  own_prepare_ = nullptr;
+  install_prepare();
+}
+
 void TerrainModel::install_prepare() {
   provider_->set_prepare(
       [own = own_prepare_, more = more_prepare_](const geo::TileKey& key, const tiles::Raster& t) {
-        own(key, t);
+        if (own) own(key, t);
         for (const TileProvider::Prepare& p : more) p(key, t);
       });
 }

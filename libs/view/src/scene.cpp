@@ -180,8 +180,12 @@ Result<std::unique_ptr<Scene>> Scene::create(const tiles::Store* elevation,
     if (elevation) {
       impl->loader = RELIEF_TRY(stream::TileLoader::create(*elevation, lo));
       impl->terrain = std::make_unique<lod::TerrainModel>(*elevation, impl->mesh, *impl->loader);
-      // Diamond errors on the loader's threads, not in the frame that first draws a tile.
-      if (impl->refine_cache) impl->refine_cache->prepare_on_load(*impl->terrain);
+      // Diamond errors on the loader's threads, not in the frame that first draws a tile;
+      // no exact quad errors there (only the quad mode's selection asks for them).
+      if (impl->refine_cache) {
+        impl->terrain->skip_exact_errors_on_load();
+        impl->refine_cache->prepare_on_load(*impl->terrain);
+      }
     } else {
       impl->terrain = std::make_unique<lod::TerrainModel>(nullptr, impl->mesh, 0);
     }

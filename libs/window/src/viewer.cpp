@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <ctime>
 #include <filesystem>
 
 #include <fmt/format.h>
@@ -196,7 +197,10 @@ Result<bool> Viewer::frame() {
   const bool quiet = v.window.events() == v.drawn_events;
   if (!v.start) v.start = v.last = now;
   const double dt = seconds_between(*v.last, now);
+  const double cpu = static_cast<double>(std::clock()) / CLOCKS_PER_SEC;
+  const double cpu_ms = (cpu - v.last_cpu) * 1e3;
   v.last = now;
+  v.last_cpu = cpu;
   v.time = seconds_between(*v.start, now);
   if (v.imagery_wanted != v.imagery_on) {
     v.imagery_on = v.imagery_wanted;
@@ -233,6 +237,13 @@ Result<bool> Viewer::frame() {
                         v.threshold, camera, report.selection.quads, report.draw.triangles,
                         report.draw.triangles_per_pixel(),
                         report.draw.geometry_bytes + report.draw.texture_bytes, report.complete});
+    ViewerFrame& f = v.frames.back();
+    if (report.refine) {
+      f.refine_ms = report.refine->seconds * 1e3;
+      f.refine_cpu_ms = report.refine->cpu_seconds * 1e3;
+      f.marks_evaluated = report.refine->marks_evaluated;
+    }
+    f.process_cpu_ms = v.index > 0 ? cpu_ms : 0.0;
   }
   if (stream::TileLoader* loader = v.scene->elevation_loader()) {
     const stream::LoaderStats s = loader->stats();

@@ -70,6 +70,7 @@ struct Viewer::Impl {
   bool frozen = false;   // the LOD panel's "freeze selection"
 
   std::optional<Clock::TimePoint> start, last;
+  double last_cpu = 0;  // the process's CPU time at `last`, seconds
   double time = 0;
   std::optional<double> path_end;  // when playback reached the end
   bool quit = false;

@@ -39,6 +39,7 @@ struct RefineStats {
   // (RefineCache::prepare_on_load).
   uint32_t tiles_measured = 0, tiles_prepared = 0;
   double seconds = 0;
+  double cpu_seconds = 0;  // the calling thread's CPU time (seconds is wall-clock)
 };
 
 struct RefinedMesh {

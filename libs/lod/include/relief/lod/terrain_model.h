@@ -123,6 +123,11 @@ class TerrainModel {
   // refine.h's diamond errors. The hook may outlive this model and its
   // caller: it must hold what it uses (copies, weak pointers).
   void add_prepare(TileProvider::Prepare prepare);
+  // The loader's threads stop measuring the quads' exact errors (quad_error)
+  // of each decoded tile: for interactive frames meshed by edge-mark
+  // refinement, whose selection never asks for them (a frame that does
+  // measures them on its own thread, as for blocking providers).
+  void skip_exact_errors_on_load();
 
  private:
   // Per-quad bounds kept between frames (~200 bytes each).

@@ -1,0 +1,57 @@
+// How refinement stores what it keeps per diamond and per grid point:
+// diamond slots (MarkGrid::slot, class by class) and edge marks in blocks
+// allocated on first write (MarkBlocks).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <vector>
+
+#include "edge_marks.h"
+#include "mark_blocks.h"
+
+namespace relief::lod {
+namespace {
+
+// Every diamond of every class has a slot of its own, all slots used.
+TEST(MarkGrid, SlotsNumberTheDiamondsOneToOne) {
+  for (int k = 2; k <= 9; ++k) {
+    const MarkGrid grid(k);
+    std::vector<int> used(grid.slots(), 0);
+    for (int c = 0; c <= grid.classes(); ++c) {  // the roots too
+      grid.for_each_in_class(c, [&](GridPoint p) {
+        ASSERT_LT(grid.slot(p), grid.slots()) << k << " " << p.x << "," << p.y;
+        ++used[grid.slot(p)];
+      });
+    }
+    EXPECT_EQ(std::count(used.begin(), used.end(), 1), static_cast<long>(used.size())) << k;
+  }
+}
+
+// Marks read undecided until written, keep what was written per quad and
+// point, and are all undecided again after reset (blocks are reused).
+TEST(MarkBlocks, MarksPerQuadAndPointUndecidedAfterReset) {
+  const MarkGrid grid(5);
+  MarkBlocks marks;
+  for (int frame = 0; frame < 2; ++frame) {
+    marks.reset(grid, 3);
+    for (int q = 0; q < 3; ++q) {
+      for (int32_t y = 0; y <= grid.n(); ++y) {
+        for (int32_t x = 0; x <= 2 * grid.n(); ++x) {
+          ASSERT_EQ(marks.get(q, {x, y}), 0) << frame << " " << q << " " << x << "," << y;
+        }
+      }
+    }
+    uint8_t& first = marks.at(1, {3, 5});
+    first = 2;
+    for (int32_t x = 0; x <= 2 * grid.n(); x += 7) marks.at(2, {x, grid.n()}) = 1;
+    EXPECT_EQ(first, 2);  // still valid after more blocks were allocated
+    EXPECT_EQ(marks.get(1, {3, 5}), 2);
+    EXPECT_EQ(marks.get(0, {3, 5}), 0);
+    EXPECT_EQ(marks.get(2, {3, 5}), 0);
+    EXPECT_EQ(marks.get(2, {14, grid.n()}), 1);
+    EXPECT_EQ(marks.get(2, {15, grid.n()}), 0);
+  }
+}
+
+}  // namespace
+}  // namespace relief::lod
