@@ -106,18 +106,44 @@ TEST_F(FusedElevation, BadLayersAreOneLineErrors) {
   }
 }
 
-// Layers of different depths are not fused at draw time yet: said so.
-TEST_F(FusedElevation, LayersOfDifferentDepthsAreRefused) {
+// Layers of different depths (a coarse layer with a fine one inside it, as
+// ETOPO5 with the Pyrenees): the coarse layer first, as the README's flight
+// gives them. Drawn with --lod quads, the still is the pair's where the fine
+// layer is (north of 42N, the far half of this view) and far closer to it
+// than the coarse layer alone; edge marks refuse them in one line.
+TEST_F(FusedElevation, ACoarseLayerWithAFineOneInsideDrawsASaneStill) {
   ASSERT_EQ(run_relief({"build", "--kind", "elevation", "-q", "-o", path("coarse"), "--max-level",
-                        "7", data("srtm/N42E001.hgt.zip")})
+                        "7", data("srtm/N41E001.hgt.zip"), data("srtm/N42E001.hgt.zip")})
                 .exit_code,
             0);
-  const RunResult r = run_relief({"render", path("n41"), "--elevation", path("coarse"), "--look-at",
-                                  "1.5,42.0,1000,60000,0,-40", "-o", path("depth.png")},
-                                 kNoMesaLeakReport);
+  const std::string camera = "1.5,42.0,1000,60000,0,-40";
+  auto quads = [](std::vector<std::string> layers) {
+    layers.push_back("--lod");
+    layers.push_back("quads");
+    return layers;
+  };
+  const Image pair = render(quads({path("pair")}), camera, "pair-quads.png");
+  const Image coarse = render(quads({path("coarse")}), camera, "coarse.png");
+  const Image fused =
+      render(quads({path("coarse"), "--elevation", path("n42")}), camera, "sparse.png");
+  // Mean absolute difference over the far (upper) half: north of 42N.
+  auto far_difference = [](const Image& a, const Image& b) {
+    double sum = 0;
+    const size_t half = a.rgba.size() / 2;
+    for (size_t i = 0; i < half; ++i) sum += std::abs(int(a.rgba[i]) - int(b.rgba[i]));
+    return sum / double(half);
+  };
+  const double to_pair = far_difference(fused, pair), coarse_to_pair = far_difference(coarse, pair);
+  EXPECT_LT(to_pair, 0.25 * coarse_to_pair) << to_pair << " against " << coarse_to_pair;
+  EXPECT_LT(to_pair, 1.0);
+
+  const std::string out = path("sparse-edge-marks.png");
+  const RunResult r = run_relief(
+      {"render", path("coarse"), "--elevation", path("n42"), "--look-at", camera, "-o", out},
+      kNoMesaLeakReport);
   EXPECT_NE(r.exit_code, 0);
-  EXPECT_TRUE(is_one_line_error(r, "finest level 7 differs from the first elevation layer's 10"))
-      << r.err;
+  EXPECT_TRUE(is_one_line_error(r, "drawn with --lod quads only")) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(out));
 }
 
 }  // namespace
