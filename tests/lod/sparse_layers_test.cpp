@@ -238,7 +238,7 @@ TEST(SparseLayers, QuadMeshesKeepTheGuaranteeMean) {
 
 // No cracks: where the fine layer ends, quads of one level draw data of
 // different levels (their own tile, or a coarser ancestor's); each side and
-// corner takes the coarser data (Selection::coarse_sides by data level).
+// corner takes the coarser data (SelectedQuad::parent_data_sides).
 TEST(SparseLayers, SharedVerticesGetIdenticalHeightsWhereTheDataLevelChanges) {
   const tiles::Store& store = sparse(pipeline::FuseMode::First);
   const MeshTopology mesh(3);

@@ -414,16 +414,19 @@ class Selector {
         if (dx || dy) level[dy + 1][dx + 1] = neighbour_level(q.key, dx, dy);
       }
     }
-    // Sparse depth (TerrainModel::data_level): a side or corner takes the
-    // parent data where a quad touching it draws coarser data, whatever its
-    // level (neighbouring data levels differ by at most one: the fused
+    auto coarser = [&](int dx, int dy) {
+      const auto& n = level[dy + 1][dx + 1];
+      return n && *n < l;
+    };
+    // Sparse depth (TerrainModel::data_level): heights take the parent data
+    // where a quad touching the side or corner draws coarser data, whatever
+    // its level (neighbouring data levels differ by at most one: the fused
     // store's padding, pipeline/fused_elevation.cpp).
     const bool by_data = terrain_.sparse_depth();
     const int own_data = terrain_.data_level(q.key);
-    auto coarser = [&](int dx, int dy) {
-      const auto& n = level[dy + 1][dx + 1];
-      if (!by_data) return n && *n < l;
-      return n && min_data_level(q.key, dx, dy) < own_data;
+    auto coarser_data = [&](int dx, int dy) {
+      if (!by_data) return coarser(dx, dy);
+      return level[dy + 1][dx + 1] && min_data_level(q.key, dx, dy) < own_data;
     };
     auto finer = [&](int dx, int dy) {
       const auto& n = level[dy + 1][dx + 1];
@@ -436,6 +439,7 @@ class Selector {
     for (const auto& d : sides) {
       if (finer(d.dx, d.dy)) q.finer_sides |= d.side;
       if (coarser(d.dx, d.dy)) q.coarse_sides |= d.side;
+      if (coarser_data(d.dx, d.dy)) q.parent_data_sides |= d.side;
     }
     // A corner takes the parent's data when any quad sharing it is coarser.
     const struct {
@@ -445,6 +449,9 @@ class Selector {
         {-1, -1, kNorthWest}, {1, -1, kNorthEast}, {-1, 1, kSouthWest}, {1, 1, kSouthEast}};
     for (const auto& c : corners) {
       if (coarser(c.dx, 0) || coarser(0, c.dy) || coarser(c.dx, c.dy)) q.coarse_corners |= c.corner;
+      if (coarser_data(c.dx, 0) || coarser_data(0, c.dy) || coarser_data(c.dx, c.dy)) {
+        q.parent_data_corners |= c.corner;
+      }
     }
   }
 

@@ -333,7 +333,7 @@ Result<double> TerrainModel::exact_mesh_error(const geo::TileKey& key) {
     ++error_counts_.measured;
   }
   // Sparse depth: a quad drawing an ancestor's data takes that tile's parent
-  // on sides shared with quads of coarser data (Selection: coarse_sides).
+  // on sides shared with quads of coarser data (SelectedQuad::parent_data_sides).
   if (sparse_ ? w.tile->level > 0 : key.level <= data_max_ && key.level > 0) {
     const DataWindow pw = parent_window(key);
     const TilePtr pt = pw.tile ? RELIEF_TRY(tile(*pw.tile)) : TilePtr{};
