@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdlib>
+#include <sstream>
 
 #include "images.h"
 #include "test_support.h"
@@ -144,6 +145,32 @@ TEST_F(FusedElevation, ACoarseLayerWithAFineOneInsideDrawsASaneStill) {
   EXPECT_NE(r.exit_code, 0);
   EXPECT_TRUE(is_one_line_error(r, "drawn with --lod quads only")) << r.err;
   EXPECT_FALSE(std::filesystem::exists(out));
+}
+
+// No crack where the data level changes (the fine layer's edge at 42N, the
+// padding around it): views that see only ground (pitch below -fov/2) over a
+// magenta sky show no magenta pixel.
+TEST_F(FusedElevation, NoCracksWhereTheFineLayerEnds) {
+  ASSERT_TRUE(std::filesystem::exists(path("coarse")))
+      << "built by ACoarseLayerWithAFineOneInsideDrawsASaneStill";
+  const double views[][5] = {{1.45, 42.02, 3600, 20, -50},
+                             {1.62, 41.98, 4200, 135, -40},
+                             {1.30, 42.05, 3800, 250, -65},
+                             {1.75, 41.95, 3500, 310, -38},
+                             {1.55, 42.10, 5000, 180, -45}};
+  int n = 0;
+  for (const auto& v : views) {
+    std::ostringstream camera_text;
+    camera_text << v[0] << ',' << v[1] << ',' << v[2] << ',' << v[3] << ',' << v[4] << ",0";
+    const std::string camera = camera_text.str();
+    const std::string out = path("crack" + std::to_string(n++) + ".png");
+    const RunResult r = run_relief(
+        {"render", path("coarse"), "--elevation", path("n42"), "--lod", "quads", "--camera", camera,
+         "--sky", "255,0,255", "--pixel-error", "1.5", "--size", "240x180", "-o", out},
+        kNoMesaLeakReport);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_EQ(count_colour(read_png(out, 240, 180), 255, 0, 255), 0u) << camera;
+  }
 }
 
 }  // namespace
