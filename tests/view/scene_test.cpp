@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 #include <thread>
+#include <tuple>
 
 #include "../ingest/built_stores.h"
 #include "../support/test_support.h"
@@ -219,6 +220,64 @@ TEST_F(SceneTest, FusedLayersRefineWithDiamondErrorsOfTheFusedTiles) {
   ASSERT_TRUE(alone);
   ASSERT_TRUE(alone->draw(seam, *target_));
   EXPECT_NE(alone->last_refined()->indices, complete->last_refined()->indices);
+}
+
+// Layers of different depths (sparse depth, docs/rendering.md): a coarse
+// layer three levels short, with N42E001 at its finest inside it. Interactive
+// frames, which draw only resident tiles and take the quads' exact errors
+// from the loader's threads, converge to the complete frame's quads, sides
+// and corners; edge marks refuse the store in one line.
+TEST_F(SceneTest, LayersOfDifferentDepthsConvergeToTheCompleteFrame) {
+  ingest::BuildOptions fine;
+  fine.inputs = {testing::data("srtm/N42E001.hgt.zip")};
+  fine.kind = tiles::DatasetKind::Elevation;
+  const tiles::Store& n42 = testing::built_store("n42", fine);
+  ingest::BuildOptions coarse = fine;
+  coarse.inputs = {testing::data("srtm/N41E001.hgt.zip"), testing::data("srtm/N42E001.hgt.zip")};
+  coarse.max_level = n42.manifest().max_level - 3;
+  std::vector<pipeline::ElevationLayer> layers;
+  layers.push_back({"coarse", testing::built_store("pair-coarse", coarse)});
+  layers.push_back({"n42", n42});
+  ThreadExecutor executor;
+  auto fused =
+      pipeline::fuse_elevation_layers(std::move(layers), pipeline::FuseMode::First, executor);
+  ASSERT_TRUE(fused) << fused.error().message;
+  ASSERT_TRUE(fused->manifest().sparse_depth);
+  const lod::Camera seam = lod::look_at(1.5, 42.0, 1000, 30000, 10, -35, 60, 160, 120);
+
+  auto live = scene(true, lod::LodMode::quads, &*fused);
+  ASSERT_TRUE(live);
+  std::optional<FrameReport> last;
+  for (int frame = 0; frame < 64 && !(last && last->complete); ++frame) {
+    if (frame > 0) wait_idle(*live);
+    auto f = live->draw(seam, *target_);
+    ASSERT_TRUE(f) << f.error().message;
+    last = *f;
+  }
+  ASSERT_TRUE(last && last->complete);
+  auto complete = scene(false, lod::LodMode::quads, &*fused);
+  ASSERT_TRUE(complete);
+  ASSERT_TRUE(complete->draw(seam, *target_));
+  auto quads = [](const lod::Selection& s) {
+    std::vector<std::tuple<geo::TileKey, int, int, int, int>> out;
+    for (const lod::SelectedQuad& q : s.quads) {
+      out.emplace_back(q.key, q.finer_sides, q.coarse_sides, q.parent_data_sides,
+                       q.parent_data_corners);
+    }
+    return out;
+  };
+  EXPECT_EQ(quads(live->last_selection()), quads(complete->last_selection()));
+  size_t by_data = 0;  // sides taking coarser data from a quad of their own level
+  for (const lod::SelectedQuad& q : complete->last_selection().quads) {
+    by_data += (q.parent_data_sides & ~q.coarse_sides) != 0;
+  }
+  EXPECT_GT(by_data, 0u);
+
+  auto edge_marks = scene(false, lod::LodMode::edge_marks, &*fused);
+  ASSERT_TRUE(edge_marks);
+  auto refused = edge_marks->draw(seam, *target_);
+  ASSERT_FALSE(refused);
+  EXPECT_NE(refused.error().message.find("--lod quads"), std::string::npos);
 }
 
 // A selection coarser than the refinement needs (quads stop splitting when

@@ -20,7 +20,7 @@ const SelectedQuad* MeshEvaluator::containing(double lon, double lat) const {
 }
 
 Result<double> MeshEvaluator::vertex_height(const SelectedQuad& q, const MeshVertex& v) {
-  const bool parent = (v.sides & q.coarse_sides) || (v.corner & q.coarse_corners);
+  const bool parent = (v.sides & q.parent_data_sides) || (v.corner & q.parent_data_corners);
   const DataWindow w = parent ? terrain_.parent_window(q.key) : terrain_.window(q.key);
   if (!w.tile) return 0.0;
   auto t = RELIEF_TRY(terrain_.tile(*w.tile));

@@ -89,8 +89,8 @@ class Selector {
   // Culls and measures one quad: visible, and its projected error bound.
   Result<Leaf> assess(const TileKey& key) {
     if (!view_) return Leaf{true, rule_(key) ? INFINITY : 0.0};
-    if (key.level > terrain_.data_max_level() && !terrain_.blocking()) {
-      // Deeper than the store, a quad whose tile is not resident can only be
+    if (terrain_.draws_ancestor(key) && !terrain_.blocking()) {
+      // Deeper than the data, a quad whose tile is not resident can only be
       // a child of a culled quad (visible quads have their data): culled.
       if (const DataWindow w = terrain_.window(key); w.tile && !terrain_.available(*w.tile)) {
         return Leaf{};
@@ -191,7 +191,7 @@ class Selector {
       const TileKey child = key.child(c & 1, c >> 1);
       const DataWindow w = terrain_.window(child);
       if (!w.tile || terrain_.available(*w.tile)) continue;
-      if (child.level > terrain_.data_max_level()) {
+      if (terrain_.draws_ancestor(child)) {
         // An unloaded quad, culled before (its bounds need the tile): only
         // restriction splits it. Lowest priority.
         request_first_missing(*w.tile);
@@ -222,7 +222,7 @@ class Selector {
         const auto n = key.neighbour(dx, dy);
         if (!n || (!dx && !dy)) continue;
         const DataWindow w = terrain_.window(*n);
-        if (!w.tile || terrain_.available(*w.tile)) continue;
+        if (!w.tile || terrain_.available(*w.tile) || terrain_.draws_ancestor(*n)) continue;
         TerrainModel::QuadInfo* info = RELIEF_TRY(terrain_.quad(*n));
         if (outside_frustum(info->box, planes_) || hidden_by_horizon(info->box, info->range))
           continue;
@@ -236,7 +236,7 @@ class Selector {
     for (int c = 0; c < 4; ++c) {
       const TileKey child = key.child(c & 1, c >> 1);
       const DataWindow w = terrain_.window(child);
-      if (!w.tile) continue;
+      if (!w.tile || terrain_.draws_ancestor(child)) continue;
       TerrainModel::QuadInfo* info = RELIEF_TRY(terrain_.quad(child));
       if (outside_frustum(info->box, planes_) || hidden_by_horizon(info->box, info->range))
         continue;
@@ -356,6 +356,25 @@ class Selector {
     return leaf->level;
   }
 
+  // The lowest data level of the leaves at the neighbour position (dx, dy) of
+  // `key` that touch it (one leaf, or the children of a subdivided neighbour
+  // on the shared side or corner).
+  int min_data_level(const TileKey& key, int dx, int dy) {
+    const TileKey n = *key.neighbour(dx, dy);
+    if (const std::optional<TileKey> leaf = leaf_containing(n)) return terrain_.data_level(*leaf);
+    int lowest = INT32_MAX;
+    for (int c = 0; c < 4; ++c) {
+      const int cx = c & 1, cy = c >> 1;
+      // The children of n touching `key`: on its side facing key.
+      if ((dx == -1 && cx != 1) || (dx == 1 && cx != 0) || (dy == -1 && cy != 1) ||
+          (dy == 1 && cy != 0)) {
+        continue;
+      }
+      lowest = std::min(lowest, terrain_.data_level(n.child(cx, cy)));
+    }
+    return lowest;
+  }
+
   // The per-quad neighbour index array of the seed's mesh creation (§1.4.3).
   void link_neighbours(std::vector<SelectedQuad>& quads) {
     QuadMap<int32_t> index(quads.size());
@@ -399,6 +418,16 @@ class Selector {
       const auto& n = level[dy + 1][dx + 1];
       return n && *n < l;
     };
+    // Sparse depth (TerrainModel::data_level): heights take the parent data
+    // where a quad touching the side or corner draws coarser data, whatever
+    // its level (neighbouring data levels differ by at most one: the fused
+    // store's padding, pipeline/fused_elevation.cpp).
+    const bool by_data = terrain_.sparse_depth();
+    const int own_data = terrain_.data_level(q.key);
+    auto coarser_data = [&](int dx, int dy) {
+      if (!by_data) return coarser(dx, dy);
+      return level[dy + 1][dx + 1] && min_data_level(q.key, dx, dy) < own_data;
+    };
     auto finer = [&](int dx, int dy) {
       const auto& n = level[dy + 1][dx + 1];
       return n && *n > l;
@@ -410,6 +439,7 @@ class Selector {
     for (const auto& d : sides) {
       if (finer(d.dx, d.dy)) q.finer_sides |= d.side;
       if (coarser(d.dx, d.dy)) q.coarse_sides |= d.side;
+      if (coarser_data(d.dx, d.dy)) q.parent_data_sides |= d.side;
     }
     // A corner takes the parent's data when any quad sharing it is coarser.
     const struct {
@@ -419,6 +449,9 @@ class Selector {
         {-1, -1, kNorthWest}, {1, -1, kNorthEast}, {-1, 1, kSouthWest}, {1, 1, kSouthEast}};
     for (const auto& c : corners) {
       if (coarser(c.dx, 0) || coarser(0, c.dy) || coarser(c.dx, c.dy)) q.coarse_corners |= c.corner;
+      if (coarser_data(c.dx, 0) || coarser_data(0, c.dy) || coarser_data(c.dx, c.dy)) {
+        q.parent_data_corners |= c.corner;
+      }
     }
   }
 
@@ -458,6 +491,11 @@ Result<Selection> restricted_quadtree(TerrainModel& terrain,
 
 Result<Selection> select_quads(const View& view, TerrainModel& terrain,
                                const SelectionOptions& options) {
+  if (options.mode == LodMode::edge_marks && terrain.sparse_depth()) {
+    return fail(
+        "elevation layers of different depths are drawn with --lod quads only (the edge-mark "
+        "refinement below a coarse layer's finest tiles is not done)");
+  }
   const auto start = std::chrono::steady_clock::now();
   Selector s(view, terrain, options);
   RELIEF_CHECK(s.run());

@@ -86,21 +86,26 @@ TerrainModel::TerrainModel(const tiles::Store* store, const MeshTopology& mesh,
     width_ = store_->grid().width();
     height_ = store_->grid().height();
     border_ = store_->grid().border();
+    sparse_ = store_->manifest().sparse_depth;
   }
   const int k = static_cast<int>(std::log2(height_));
   max_level_ = data_max_ + std::max(0, k - mesh_.refinement());
 }
 
-DataWindow TerrainModel::window(const geo::TileKey& key) const {
-  DataWindow w;
-  if (key.level <= data_max_) {
-    if (store_ && store_->has_tile(key)) w.tile = key;
-    w.width = width_;
-    w.height = height_;
-    return w;
+int TerrainModel::data_level(const geo::TileKey& key) const {
+  const int top = std::min(key.level, data_max_);
+  if (!sparse_) return top;
+  for (int level = top; level >= 0; --level) {
+    const int m = key.level - level;
+    if (store_->has_tile({level, key.x >> m, key.y >> m})) return level;
   }
-  const int m = key.level - data_max_;
-  const geo::TileKey a{data_max_, key.x >> m, key.y >> m};
+  return top;  // no data at all: height 0, like a quad of the data's level
+}
+
+DataWindow TerrainModel::window_at(const geo::TileKey& key, int level) const {
+  const int m = key.level - level;
+  const geo::TileKey a{level, key.x >> m, key.y >> m};
+  DataWindow w;
   if (store_ && store_->has_tile(a)) w.tile = a;
   w.width = std::ldexp(width_, -m);
   w.height = std::ldexp(height_, -m);
@@ -109,16 +114,16 @@ DataWindow TerrainModel::window(const geo::TileKey& key) const {
   return w;
 }
 
+DataWindow TerrainModel::window(const geo::TileKey& key) const {
+  return window_at(key, data_level(key));
+}
+
 DataWindow TerrainModel::parent_window(const geo::TileKey& key) const {
-  if (key.level == 0 || key.level > data_max_) return window(key);
-  const geo::TileKey p = *key.parent();
-  DataWindow w;
-  if (store_ && store_->has_tile(p)) w.tile = p;
-  w.width = width_ / 2.0;
-  w.height = height_ / 2.0;
-  w.x0 = (key.x & 1) * w.width;
-  w.y0 = (key.y & 1) * w.height;
-  return w;
+  const int level = data_level(key);
+  // Beyond a complete store's finest level, quads of every level draw the
+  // finest data: it is their parent's too.
+  if (level == 0 || (!sparse_ && key.level > data_max_)) return window(key);
+  return window_at(key, level - 1);
 }
 
 void TerrainModel::begin_frame() {
@@ -174,14 +179,21 @@ Result<HeightRange> TerrainModel::subtree_range(const geo::TileKey& key) {
   HeightRange r{0, 0};
   if (store_ && key.level <= data_max_) {
     if (const tiles::IndexEntry* e = store_->index(key.level).find(key)) {
+      HeightRange own{e->min, e->max};
+      if (e->valid_count < static_cast<uint32_t>(width_ * height_)) own = unite(own, {0, 0});
       if (key.level == data_max_) {
-        r = {e->min, e->max};
-        if (e->valid_count < static_cast<uint32_t>(width_ * height_)) r = unite(r, {0, 0});
+        r = own;
       } else {
         bool first = true;
         for (int c = 0; c < 4; ++c) {
-          const HeightRange child = RELIEF_TRY(subtree_range(key.child(c & 1, c >> 1)));
-          r = first ? child : unite(r, child);
+          const geo::TileKey child = key.child(c & 1, c >> 1);
+          // Sparse depth: where a child has no tile, this tile's data goes on.
+          if (sparse_ && !store_->has_tile(child)) {
+            r = first ? own : unite(r, own);
+          } else {
+            r = first ? RELIEF_TRY(subtree_range(child))
+                      : unite(r, RELIEF_TRY(subtree_range(child)));
+          }
           first = false;
         }
       }
@@ -192,8 +204,8 @@ Result<HeightRange> TerrainModel::subtree_range(const geo::TileKey& key) {
 }
 
 Result<HeightRange> TerrainModel::height_range(const geo::TileKey& key) {
-  if (key.level <= data_max_) return subtree_range(key);
   const DataWindow w = window(key);
+  if (!draws_ancestor(key)) return subtree_range(key);
   HeightRange r{0, 0};
   if (w.tile) {
     const TilePtr t = RELIEF_TRY(tile(*w.tile));
@@ -234,7 +246,7 @@ bool TerrainModel::data_resident(const geo::TileKey& key) {
 }
 
 Result<double> TerrainModel::level_error(const geo::TileKey& key) {
-  if (key.level >= data_max_ || !store_) return 0.0;
+  if (key.level >= data_max_ || !store_ || draws_ancestor(key)) return 0.0;
   return subtree_error(key);
 }
 
@@ -271,6 +283,30 @@ Result<double> TerrainModel::mesh_error(const geo::TileKey& key) {
   return error + RELIEF_TRY(level_error(key)) + RELIEF_TRY(exact_mesh_error(key));
 }
 
+// Sparse depth: the sides and corners of quad `key` that may take the parent
+// data in a selection, where a quad touching it may draw coarser data. The
+// touching quads are one level coarser at most, and a coarser quad's data
+// level is never above a finer one's there: the neighbour's parent decides.
+// Elsewhere a quad drawing an ancestor's window keeps its own data on every
+// side, so its bound has no edge term there (splitting it would not reduce
+// the term: the same two tiles at every level).
+void TerrainModel::coarser_data_around(const geo::TileKey& key, uint8_t& sides,
+                                       uint8_t& corners) const {
+  sides = corners = 0;
+  if (key.level == 0) return;
+  const int own = data_level(key);
+  auto lower = [&](int dx, int dy) {
+    const auto n = key.neighbour(dx, dy);
+    return n && data_level(*n->parent()) < own;
+  };
+  const bool w = lower(-1, 0), e = lower(1, 0), n = lower(0, -1), s = lower(0, 1);
+  sides =
+      static_cast<uint8_t>((w ? kWest : 0) | (e ? kEast : 0) | (n ? kNorth : 0) | (s ? kSouth : 0));
+  corners = static_cast<uint8_t>(
+      ((w || n || lower(-1, -1)) ? kNorthWest : 0) | ((e || n || lower(1, -1)) ? kNorthEast : 0) |
+      ((w || s || lower(-1, 1)) ? kSouthWest : 0) | ((e || s || lower(1, 1)) ? kSouthEast : 0));
+}
+
 struct TerrainModel::PreparedErrors {
   std::mutex mutex;
   std::unordered_map<geo::TileKey, double, geo::TileKeyHash> errors;
@@ -293,15 +329,19 @@ Result<double> TerrainModel::exact_mesh_error(const geo::TileKey& key) {
   if (worst) {
     ++error_counts_.prepared;
   } else {
-    worst = mesh_sample_error(mesh_, *t, border_, w, key.level < data_max_);
+    worst = mesh_sample_error(mesh_, *t, border_, w, key.level < data_max_ && !draws_ancestor(key));
     ++error_counts_.measured;
   }
-  if (key.level <= data_max_ && key.level > 0) {
+  // Sparse depth: a quad drawing an ancestor's data takes that tile's parent
+  // on sides shared with quads of coarser data (SelectedQuad::parent_data_sides).
+  if (sparse_ ? w.tile->level > 0 : key.level <= data_max_ && key.level > 0) {
     const DataWindow pw = parent_window(key);
     const TilePtr pt = pw.tile ? RELIEF_TRY(tile(*pw.tile)) : TilePtr{};
     double edge = 0;
+    uint8_t sides = 0xF, corners = 0xF;
+    if (sparse_) coarser_data_around(key, sides, corners);
     for (const MeshVertex& v : mesh_.vertices()) {
-      if (!v.sides) continue;
+      if (!v.sides || !((v.sides & sides) || (v.corner & corners))) continue;
       const double own = bilinear(*t, border_, w.x0 + v.u * w.width, w.y0 + v.v * w.height);
       const double hp =
           pt ? bilinear(*pt, border_, pw.x0 + v.u * pw.width, pw.y0 + v.v * pw.height) : 0.0;

@@ -2,6 +2,8 @@
 
 #include <cmath>
 #include <memory>
+#include <set>
+#include <unordered_map>
 
 #include <fmt/format.h>
 
@@ -24,21 +26,53 @@ struct Layers {
   // lossless, so the decoded samples are the fused ones.
   tiles::CodecOptions codec{tiles::Codec::Zstd, 0.0, 90, 1};
 
+  // The layers in the order their samples are taken: the deeper first (a
+  // layer upsampled beyond its finest level never hides finer data), then in
+  // the order given.
+  std::vector<size_t> order;
+
+  // Layer i's tile at `key`: its own, or below its finest level its finest
+  // tile there upsampled (pipeline/fuse_tiles.h); null where it has no data.
+  Result<RasterPtr> layer_tile(size_t i, const geo::TileKey& key) const {
+    const tiles::Store& store = layers[i].store;
+    const int finest = store.manifest().max_level;
+    if (key.level <= finest) {
+      if (!store.has_tile(key)) return RasterPtr{};
+      return std::make_shared<const tiles::Raster>(RELIEF_TRY(store.read_tile(key)).raster);
+    }
+    const int m = key.level - finest;
+    const geo::TileKey a{finest, key.x >> m, key.y >> m};
+    if (!store.has_tile(a)) return RasterPtr{};
+    const tiles::Tile t = RELIEF_TRY(store.read_tile(a));
+    return std::make_shared<const tiles::Raster>(upsample(t.raster, a, key, grid));
+  }
+
+  // Whether some layer has data at `key` (its own tile, or its finest above).
+  bool has_data(const geo::TileKey& key) const {
+    for (const ElevationLayer& l : layers) {
+      const int m = std::max(0, key.level - l.store.manifest().max_level);
+      if (l.store.has_tile({key.level - m, key.x >> m, key.y >> m})) return true;
+    }
+    return false;
+  }
+
   // The fused bordered tile, nodata as NaN; null where no layer has it.
   Result<RasterPtr> fused(const geo::TileKey& key) const {
-    std::vector<tiles::Tile> held;
-    held.reserve(layers.size());
-    std::vector<const tiles::Raster*> rasters(layers.size(), nullptr);
-    for (size_t i = 0; i < layers.size(); ++i) {
-      if (!layers[i].store.has_tile(key)) continue;
-      held.push_back(RELIEF_TRY(layers[i].store.read_tile(key)));
-      rasters[i] = &held.back().raster;
+    std::vector<RasterPtr> held;
+    std::vector<const tiles::Raster*> rasters;
+    std::vector<double> w;
+    for (size_t i : order) {
+      RasterPtr r = RELIEF_TRY(layer_tile(i, key));
+      if (!r) continue;
+      rasters.push_back(r.get());
+      w.push_back(weights[i]);
+      held.push_back(std::move(r));
     }
     if (held.empty()) return RasterPtr{};
-    if (held.size() == 1) return std::make_shared<const tiles::Raster>(std::move(held[0].raster));
+    if (held.size() == 1) return held[0];
     auto out = std::make_shared<tiles::Raster>(tiles::Raster::empty(
         tiles::SampleType::Float32, grid.padded_width(), grid.padded_height()));
-    fuse_float(rasters, weights, mode, *out);
+    fuse_float(rasters, w, mode, *out);
     return RasterPtr(std::move(out));
   }
 
@@ -94,12 +128,6 @@ Status check_layer(const tiles::Manifest& first, const ElevationLayer& layer) {
     return fail(fmt::format("{}: tile size or border differs from the first elevation layer's",
                             layer.name));
   }
-  if (m.max_level != first.max_level) {
-    return fail(fmt::format(
-        "{}: finest level {} differs from the first elevation layer's {}; layers of different "
-        "depths are not fused at draw time yet (relief fuse --allow-upsampling does it offline)",
-        layer.name, m.max_level, first.max_level));
-  }
   return {};
 }
 
@@ -125,6 +153,80 @@ tiles::SampleStats pooled_stats(const std::vector<ElevationLayer>& layers) {
   return s;
 }
 
+// The tiles of the fused store, per level (index = level). With layers of
+// different depths (sparse depth, docs/rendering.md), a quad without a tile
+// draws its deepest ancestor tile, so data levels change where the finer
+// layer ends; the fused store also holds the eight neighbours of the parent
+// of each tile (where some layer has data), so two touching quads never draw
+// data more than one level apart and each side can take the coarser one.
+std::vector<std::vector<geo::TileKey>> tile_keys(const Layers& layers,
+                                                 const tiles::Manifest& manifest) {
+  std::vector<std::set<geo::TileKey>> sets(static_cast<size_t>(manifest.max_level) + 1);
+  for (const ElevationLayer& l : layers.layers) {
+    for (int level = l.store.manifest().min_level; level <= l.store.manifest().max_level; ++level) {
+      for (const tiles::IndexEntry& e : l.store.index(level).entries()) {
+        sets[static_cast<size_t>(level)].insert(e.key);
+      }
+    }
+  }
+  for (int level = manifest.max_level; manifest.sparse_depth && level > manifest.min_level;
+       --level) {
+    for (const geo::TileKey& key : sets[static_cast<size_t>(level)]) {
+      const geo::TileKey parent = *key.parent();
+      for (int dy = -1; dy <= 1; ++dy) {
+        for (int dx = -1; dx <= 1; ++dx) {
+          const auto n = parent.neighbour(dx, dy);
+          if (n && layers.has_data(*n)) sets[static_cast<size_t>(level - 1)].insert(*n);
+        }
+      }
+    }
+  }
+  std::vector<std::vector<geo::TileKey>> keys;
+  for (const auto& s : sets) keys.emplace_back(s.begin(), s.end());
+  return keys;
+}
+
+// Geometric errors where the finest data is not at one level: below a tile
+// with fewer than four child tiles, the data is that tile's (a leaf there).
+// Each level's leaves are compared with every ancestor as the finest level's
+// tiles are (tiles/geometric_error.h), and a tile's error is the largest it
+// gets from any level (comparing a partial leaf's whole tile only adds
+// distances to data that is not the finest: still an upper bound).
+Status sparse_geometric_errors(std::vector<tiles::LevelIndex>& indices,
+                               const tiles::TileShape& shape, const tiles::BorderedTileReader& read,
+                               Executor& executor) {
+  std::vector<std::unordered_map<geo::TileKey, float, geo::TileKeyHash>> worst(indices.size());
+  for (size_t l = 1; l < indices.size(); ++l) {
+    tiles::LevelIndex leaves(indices[l].level());
+    for (const tiles::IndexEntry& e : indices[l].entries()) {
+      int children = 0;
+      for (int c = 0; l + 1 < indices.size() && c < 4; ++c) {
+        children += indices[l + 1].find(e.key.child(c & 1, c >> 1)) != nullptr;
+      }
+      if (children < 4) leaves.add(e);
+    }
+    if (leaves.size() == 0) continue;
+    std::vector<tiles::LevelIndex> pass(indices.begin(), indices.begin() + static_cast<long>(l));
+    pass.push_back(std::move(leaves));
+    NullProgress progress;
+    RELIEF_CHECK(tiles::compute_geometric_errors(pass, shape, read, executor, progress));
+    for (size_t a = 0; a < l; ++a) {
+      for (const tiles::IndexEntry& e : pass[a].entries()) {
+        float& w = worst[a][e.key];
+        w = std::max(w, e.error);
+      }
+    }
+  }
+  for (size_t l = 0; l < indices.size(); ++l) {
+    const auto entries = indices[l].entries();  // a copy: set_error edits them
+    for (const tiles::IndexEntry& e : entries) {
+      const auto it = worst[l].find(e.key);
+      indices[l].set_error(e.key, it == worst[l].end() ? 0.0f : it->second);
+    }
+  }
+  return {};
+}
+
 }  // namespace
 
 Result<tiles::Store> fuse_elevation_layers(std::vector<ElevationLayer> layers, FuseMode mode,
@@ -136,6 +238,8 @@ Result<tiles::Store> fuse_elevation_layers(std::vector<ElevationLayer> layers, F
   for (size_t i = 1; i < layers.size(); ++i) {
     const tiles::Manifest& m = layers[i].store.manifest();
     manifest.min_level = std::min(manifest.min_level, m.min_level);
+    manifest.max_level = std::max(manifest.max_level, m.max_level);
+    manifest.sparse_depth |= m.max_level != layers[0].store.manifest().max_level;
     manifest.extent.west = std::min(manifest.extent.west, m.extent.west);
     manifest.extent.south = std::min(manifest.extent.south, m.extent.south);
     manifest.extent.east = std::max(manifest.extent.east, m.extent.east);
@@ -150,26 +254,27 @@ Result<tiles::Store> fuse_elevation_layers(std::vector<ElevationLayer> layers, F
   shared->grid = layers[0].store.grid();
   shared->mode = mode;
   shared->weights.assign(layers.size(), 1.0);
+  for (size_t i = 0; i < layers.size(); ++i) shared->order.push_back(i);
+  std::stable_sort(shared->order.begin(), shared->order.end(), [&layers](size_t a, size_t b) {
+    return layers[a].store.manifest().max_level > layers[b].store.manifest().max_level;
+  });
   shared->layers = std::move(layers);
   manifest.codec = shared->codec;
 
-  // Per level: the union of the layers' tiles, bounds from the fused samples.
+  // Per level: the union of the layers' tiles (plus, for layers of different
+  // depths, the padding that keeps neighbouring data levels one apart).
+  std::vector<std::vector<geo::TileKey>> keys = tile_keys(*shared, manifest);
   std::vector<tiles::LevelIndex> indices;
   for (int level = manifest.min_level; level <= manifest.max_level; ++level) {
-    std::vector<geo::TileKey> keys;
-    for (const ElevationLayer& l : shared->layers) {
-      for (const tiles::IndexEntry& e : l.store.index(level).entries()) keys.push_back(e.key);
-    }
-    std::sort(keys.begin(), keys.end());
-    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
-    std::vector<tiles::IndexEntry> entries(keys.size());
+    const std::vector<geo::TileKey>& level_keys = keys[static_cast<size_t>(level)];
+    std::vector<tiles::IndexEntry> entries(level_keys.size());
     FirstError error;
-    executor.parallel_for(keys.size(), [&](size_t k) {
-      auto bytes = shared->encoded(keys[k]);
+    executor.parallel_for(level_keys.size(), [&](size_t k) {
+      auto bytes = shared->encoded(level_keys[k]);
       if (!bytes) return error.set(bytes.error());
       auto header = tiles::parse_tile_header(*bytes, name);
       if (!header) return error.set(header.error());
-      entries[k] = tiles::index_entry_for(keys[k], *header, bytes->size());
+      entries[k] = tiles::index_entry_for(level_keys[k], *header, bytes->size());
     });
     RELIEF_CHECK(error.status());
     tiles::LevelIndex index(level);
@@ -179,11 +284,16 @@ Result<tiles::Store> fuse_elevation_layers(std::vector<ElevationLayer> layers, F
   // Exact geometric errors of the fused pyramid, as `relief build` computes
   // a store's: fusing changes the coarse tiles and the finest data alike, so
   // the layers' own errors do not bound the fused mesh.
-  NullProgress progress;
   const tiles::TileShape shape = *tiles::tile_shape_of(manifest);
-  RELIEF_CHECK(tiles::compute_geometric_errors(
-      indices, shape, [&shared](const geo::TileKey& key) { return shared->fused(key); }, executor,
-      progress));
+  const tiles::BorderedTileReader read = [&shared](const geo::TileKey& key) {
+    return shared->fused(key);
+  };
+  if (manifest.sparse_depth) {
+    RELIEF_CHECK(sparse_geometric_errors(indices, shape, read, executor));
+  } else {
+    NullProgress progress;
+    RELIEF_CHECK(tiles::compute_geometric_errors(indices, shape, read, executor, progress));
+  }
 
   std::vector<std::vector<std::byte>> serialized(static_cast<size_t>(manifest.max_level) + 1);
   for (tiles::LevelIndex& index : indices) {

@@ -61,7 +61,8 @@ QuadRecord QuadRecords::make(const lod::SelectedQuad& q, const lod::Vec3& eye) {
   r.size[3] = static_cast<float>(b.south);
   r.slots[3] = static_cast<uint32_t>(q.coarse_sides) << 4 |
                static_cast<uint32_t>(q.coarse_corners) << 8 | (q.key.x & 1u) << 12 |
-               (q.key.y & 1u) << 13;
+               (q.key.y & 1u) << 13 | static_cast<uint32_t>(q.parent_data_sides) << 14 |
+               static_cast<uint32_t>(q.parent_data_corners) << 18 | kNormalFloat;
   return r;
 }
 

@@ -15,7 +15,12 @@ enum QuadBits : uint32_t {
   kHasOwn = 1,      // own heights resident (else height 0)
   kHasParent = 2,   // parent heights resident
   kHasImagery = 4,  // imagery resident
-  // coarse_sides << 4, coarse_corners << 8, x & 1 << 12, y & 1 << 13
+  // coarse_sides << 4, coarse_corners << 8, x & 1 << 12, y & 1 << 13,
+  // parent_data_sides << 14, parent_data_corners << 18
+  // The bits travel as a float texel: with bits up to 22 set alone it is a
+  // denormal, which Mesa's llvmpipe did not return intact (heights from the
+  // wrong data: gpu_geometry_test); an exponent bit makes it a normal float.
+  kNormalFloat = 1u << 30,
 };
 
 struct QuadRecord {

@@ -79,6 +79,10 @@ void main() {
   uint bits = slots.w;
   uint coarse_sides = (bits >> 4) & 15u, coarse_corners = (bits >> 8) & 15u;
   bool parent = ((flags & 15u) & coarse_sides) != 0u || (((flags >> 4) & 15u) & coarse_corners) != 0u;
+  // Heights: the parent data where a quad touching the vertex draws coarser
+  // data (lod::SelectedQuad::parent_data_sides; the same bits but for sparse depth).
+  uint data_sides = (bits >> 14) & 15u, data_corners = (bits >> 18) & 15u;
+  bool parent_data = ((flags & 15u) & data_sides) != 0u || (((flags >> 4) & 15u) & data_corners) != 0u;
 
   // The anchor and the offset from it, in degrees (exact).
   vec2 p = uv;
@@ -118,7 +122,7 @@ void main() {
 
   vec4 own_window = record(16);
   float h = 0.0;
-  if (parent) {
+  if (parent_data) {
     vec4 w = record(17);
     if ((bits & 2u) != 0u) h = bilinear(int(slots.y), w.xy + uv * w.zw);
   } else if ((bits & 1u) != 0u) {

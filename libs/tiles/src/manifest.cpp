@@ -115,6 +115,7 @@ std::string Manifest::to_json() const {
   }
   j["sources"] = sources_json;
   j["created_by"] = created_by;
+  if (sparse_depth) j["sparse_depth"] = true;
   return j.dump(2) + "\n";
 }
 
@@ -173,6 +174,7 @@ Result<Manifest> Manifest::from_json(const std::string& text, const std::string&
                            integer_at<int>(src, "bands"), src.at("data_type").get<std::string>()});
     }
     m.created_by = j.value("created_by", "");
+    m.sparse_depth = j.value("sparse_depth", false);
     RELIEF_CHECK(check_consistency(m, name));
     return m;
   } catch (const json::exception& ex) {

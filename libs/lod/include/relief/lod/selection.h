@@ -55,8 +55,13 @@ struct SelectedQuad {
   uint8_t finer_sides = 0;     // Side bits: neighbours one level finer (split border triangles)
   uint8_t coarse_sides = 0;    // Side bits: neighbours one level coarser (take parent data)
   uint8_t coarse_corners = 0;  // Corner bits: a quad sharing the corner is coarser
-  double error_pixels = 0;     // the bound that stopped the split
-  double priority = 0;         // view priority of loading its data (interactive frames only)
+  // Where the vertices' heights take the parent data (TerrainModel::parent_window):
+  // the coarse sides and corners, or, for a store of sparse depth, those where
+  // a quad touching them draws coarser data (TerrainModel::data_level), whatever
+  // its level. The positions follow coarse_sides/corners.
+  uint8_t parent_data_sides = 0, parent_data_corners = 0;
+  double error_pixels = 0;  // the bound that stopped the split
+  double priority = 0;      // view priority of loading its data (interactive frames only)
   // Indices into Selection::quads of the neighbours across each side, two per
   // side (west, east, north, south): both set when the side has two finer
   // neighbours, the first alone otherwise; -1 where there is none on screen.

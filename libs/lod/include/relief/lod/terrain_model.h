@@ -62,11 +62,23 @@ class TerrainModel {
   int border() const { return border_; }
 
   // The data tile and window of quad `key`; at or above the store's finest
-  // level the tile is the quad itself.
+  // level the tile is the quad itself. Stores of sparse depth
+  // (Manifest::sparse_depth, fused layers of different depths): the quad's
+  // tile, or else its deepest ancestor tile (where a tile has no child, its
+  // data goes on below it).
   DataWindow window(const geo::TileKey& key) const;
   // The window of the quad's parent data, for vertices on sides shared with a
   // coarser quad: the parent's tile (or, beyond the store, the same tile).
+  // Sparse depth: the parent of the tile the quad draws, for sides shared
+  // with quads of coarser data.
   DataWindow parent_window(const geo::TileKey& key) const;
+  // The level of the data quad `key` draws (window()'s tile's): its own level
+  // up to the store's finest; for sparse depth the deepest ancestor tile's.
+  int data_level(const geo::TileKey& key) const;
+  // Whether the quad draws a window of an ancestor tile (beyond the finest
+  // level, or below a leaf of a store of sparse depth), not a tile of its own.
+  bool draws_ancestor(const geo::TileKey& key) const { return data_level(key) < key.level; }
+  bool sparse_depth() const { return sparse_; }
 
   // Frames: between begin_frame() and the next one, every tile found
   // available() stays pinned (resident), so selection and drawing see the
@@ -135,6 +147,8 @@ class TerrainModel {
   TerrainModel(const tiles::Store* store, const MeshTopology& mesh,
                std::unique_ptr<TileProvider> owned, TileProvider* provider);
   Result<HeightRange> height_range(const geo::TileKey& key);
+  DataWindow window_at(const geo::TileKey& key, int level) const;
+  void coarser_data_around(const geo::TileKey& key, uint8_t& sides, uint8_t& corners) const;
   // Whether the data the quad draws is resident: its tile and, for its sides
   // shared with a coarser quad, its parent's (or there are none).
   bool data_resident(const geo::TileKey& key);
@@ -156,6 +170,7 @@ class TerrainModel {
   const tiles::Store* store_;
   const MeshTopology& mesh_;
   int data_max_ = 0, max_level_ = 0, width_ = 512, height_ = 256, border_ = 0;
+  bool sparse_ = false;  // Manifest::sparse_depth
   std::unique_ptr<TileProvider> owned_provider_;
   TileProvider* provider_;
   std::unordered_map<geo::TileKey, TilePtr, geo::TileKeyHash> pinned_;  // this frame's

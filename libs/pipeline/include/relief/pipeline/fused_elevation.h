@@ -27,10 +27,13 @@ struct ElevationLayer {
   tiles::Store store;
 };
 
-// At least one layer, every one an elevation store of the same tile size,
-// border and finest level (the first is the reference; an error names the
-// layer that differs). First: the first layer with a valid sample wins, in
-// the order given; Blend: the mean of the valid samples.
+// At least one layer, every one an elevation store of the same tile size and
+// border (the first is the reference; an error names the layer that
+// differs). First: the first layer with a valid sample wins, the deeper
+// layers first, then in the order given; Blend: the mean of the valid
+// samples. Below a layer's finest level its finest tiles are upsampled
+// (bilinear). Layers of different depths make a store of sparse depth
+// (Manifest::sparse_depth): where a tile has no child, quads below it draw it.
 Result<tiles::Store> fuse_elevation_layers(std::vector<ElevationLayer> layers, FuseMode mode,
                                            Executor& executor);
 

@@ -45,6 +45,10 @@ struct Manifest {
   CodecOptions codec;
   std::vector<SourceInfo> sources;
   std::string created_by;
+  // Tiles of different depths (elevation layers fused at draw time,
+  // pipeline/fused_elevation.h): where a tile has no child, its data goes on
+  // below it (drawn from it), instead of there being no data.
+  bool sparse_depth = false;
 
   std::string nodata_description() const;
   std::string to_json() const;
