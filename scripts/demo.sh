@@ -32,8 +32,13 @@ PLANET=$(dirname "$OUT")
   --overwrite
 "$RELIEF" render "$PLANET/etopo5" --imagery "$PLANET/blue-marble" --camera 5,30,9000000,0,-90,0 \
   --size 1280x960 -o "$PLANET/earth.png"
-# A 6 s H.264 movie from orbit down towards the Pyrenees, every frame complete.
-"$RELIEF" render "$PLANET/etopo5" --imagery "$PLANET/blue-marble" \
+# A 6 s H.264 movie from orbit down into the Pyrenees, every frame complete:
+# the Pyrenees pyramid (level 10) fused at draw time into ETOPO5 (level 4),
+# so the descent ends on SRTM detail. Layers of different depths need
+# --lod quads for now (docs/rendering.md).
+"$RELIEF" render "$PLANET/etopo5" --elevation "$OUT" --lod quads --camera 1.5,41.2,150000,0,-35,0 \
+  --size 1280x720 -o "$PLANET/planet-pyrenees.png"
+"$RELIEF" render "$PLANET/etopo5" --elevation "$OUT" --imagery "$PLANET/blue-marble" --lod quads \
   --path data/paths/orbit-to-pyrenees.json --size 960x540 -o "$PLANET/planet-flight.mp4"
 
 SAR=$(dirname "$OUT")/umbra
