@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <thread>
 
 #include "../ingest/built_stores.h"
@@ -57,6 +58,8 @@ class TextureLayersTest : public GlSceneTest {
   std::unique_ptr<Scene> scene(std::vector<render::TextureLayer> layers, bool interactive) {
     SceneOptions o;
     o.interactive = interactive;
+    // Frames stepped deterministically: no wall-clock budget on processing.
+    o.render.processing_per_frame = std::numeric_limits<double>::infinity();
     o.texture_layers = std::move(layers);
     o.selection.texture = &sar();
     auto s = Scene::create(nullptr, nullptr, o, clock_);

@@ -78,7 +78,7 @@ Status merge_encoded(Layer& into, int r0, int r1, std::span<const std::byte> mes
     return fail("compositing: a message with a malformed run table");
   }
   std::vector<uint32_t> runs(count);
-  std::memcpy(runs.data(), message.data() + 4, static_cast<size_t>(count) * 4);
+  if (count) std::memcpy(runs.data(), message.data() + 4, static_cast<size_t>(count) * 4);
   size_t pixels = 0, copied = 0;
   for (uint32_t k = 0; k < count; k += 2) pixels += runs[k] + runs[k + 1], copied += runs[k + 1];
   const size_t rows_pixels = static_cast<size_t>(r1 - r0) * static_cast<size_t>(into.width);

@@ -186,6 +186,7 @@ class GlTerrainRenderer final : public TerrainRenderer {
                           RenderTarget& target, const RenderOptions& o,
                           const lod::RefinedMesh* refined) override {
     const auto start = Clock::now();
+    processing_per_frame_ = o.processing_per_frame;
     FrameStats stats = RELIEF_TRY(prepare(view, selection, refined));
     stats.prepare_seconds = std::chrono::duration<double>(Clock::now() - start).count();
     stats.pixels = static_cast<uint64_t>(target.width()) * static_cast<uint64_t>(target.height());
@@ -223,6 +224,7 @@ class GlTerrainRenderer final : public TerrainRenderer {
 
   Result<std::vector<float>> capture(const lod::View& view, const lod::Selection& selection,
                                      const RenderOptions& o, const lod::RefinedMesh* refined) {
+    processing_per_frame_ = o.processing_per_frame;
     const FrameStats stats = RELIEF_TRY(prepare(view, selection, refined));
     if (!capture_program_.id()) {
       capture_program_ = RELIEF_TRY(
@@ -535,7 +537,7 @@ class GlTerrainRenderer final : public TerrainRenderer {
     // processing time, the rest are made by the next frames (ancestors
     // meanwhile). A time budget, not a count: cheap chains finish a view in
     // one frame, costly ones keep frames short.
-    if (interactive && made_this_frame_ > 0 && processed_this_frame_ >= kProcessingPerFrame) {
+    if (interactive && made_this_frame_ > 0 && processed_this_frame_ >= processing_per_frame_) {
       return made;
     }
     // What the GL still has to do first (llvmpipe rasterises the previous
@@ -629,10 +631,9 @@ class GlTerrainRenderer final : public TerrainRenderer {
   }
 
   static constexpr int kMaxGridK = 11;  // 4097 x 2049 vertices per grid
-  // Seconds of processing per interactive frame: the latency issue 14 asks
-  // of a parameter change (100 ms), so a view whose processing fits is
-  // complete in the first frame after the change.
-  static constexpr double kProcessingPerFrame = 0.1;
+  // Seconds of processing per interactive frame (RenderOptions): a view
+  // whose processing fits is complete in the first frame after a change.
+  double processing_per_frame_ = 0.1;
 
   lod::TerrainModel& elevation_;
   const tiles::Store* imagery_;
