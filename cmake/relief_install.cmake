@@ -22,6 +22,20 @@ function(relief_library target name)
   install(DIRECTORY ${CMAKE_CURRENT_SOURCE_DIR}/include/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
 endfunction()
 
+# Where loadable modules are installed (relief/base/module.h looks there).
+set(RELIEF_MODULE_INSTALL_SUBDIR ${CMAKE_INSTALL_LIBDIR}/relief)
+
+# A module that `consumer` loads at run time with relief::load_module_symbol:
+# installed in RELIEF_MODULE_INSTALL_SUBDIR, its path in the build tree
+# passed to the consumer as PREFIX_MODULE_BUILD_PATH.
+function(relief_loadable_module consumer module prefix)
+  set_target_properties(${module} PROPERTIES CXX_VISIBILITY_PRESET hidden)
+  install(TARGETS ${module} LIBRARY DESTINATION ${RELIEF_MODULE_INSTALL_SUBDIR})
+  target_compile_definitions(${consumer} PRIVATE
+    ${prefix}_MODULE_BUILD_PATH="$<TARGET_FILE:${module}>")
+  add_dependencies(${consumer} ${module})
+endfunction()
+
 # The export set, reliefConfig.cmake and its version file; call once, after
 # every relief_library().
 function(relief_install_package)

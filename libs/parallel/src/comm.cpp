@@ -1,57 +1,22 @@
 #include "relief/parallel/comm.h"
 
-#include <dlfcn.h>
-
-#include <cstdlib>
-#include <filesystem>
-
-#include <fmt/format.h>
-
+#include "relief/base/module.h"
 #include "transport.h"
 
 namespace relief::parallel {
 
 namespace {
 
-namespace fs = std::filesystem;
-
-// Where the MPI module may be: $RELIEF_PARALLEL_MODULE, then beside an
-// installed program (bin/../lib/relief/), then the build tree.
-std::vector<fs::path> module_candidates() {
-  std::vector<fs::path> paths;
-  if (const char* env = std::getenv("RELIEF_PARALLEL_MODULE"); env && *env) {
-    paths.emplace_back(env);
-  }
-  std::error_code ec;
-  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
-  if (!ec) {
-    paths.push_back(exe.parent_path().parent_path() / RELIEF_PARALLEL_MODULE_INSTALL_SUBDIR /
-                    RELIEF_PARALLEL_MODULE_NAME);
-  }
-  paths.emplace_back(RELIEF_PARALLEL_MODULE_BUILD_PATH);
-  return paths;
-}
-
 // The MPI module (transport.h says why it is one). Loaded once per process,
-// as MPI initialises once; kept for the process's life.
+// as MPI initialises once. Global: OpenMPI's own plugins (dlopened by
+// libopen-pal) may resolve symbols of libmpi, which this module brings in.
 Result<OpenTransport> load_transport() {
-  std::string tried;
-  for (const fs::path& path : module_candidates()) {
-    std::error_code ec;
-    if (!fs::exists(path, ec)) {
-      tried += (tried.empty() ? "" : ", ") + path.string();
-      continue;
-    }
-    // Global: OpenMPI's own plugins (dlopened by libopen-pal) may resolve
-    // symbols of libmpi, which this module brings in.
-    void* module = dlopen(path.c_str(), RTLD_NOW | RTLD_GLOBAL);
-    if (!module) return fail(fmt::format("parallel: cannot load {}: {}", path.string(), dlerror()));
-    auto open = reinterpret_cast<OpenTransport>(dlsym(module, kOpenTransportSymbol));
-    if (!open)
-      return fail(fmt::format("parallel: {} has no {}", path.string(), kOpenTransportSymbol));
-    return open;
-  }
-  return fail("parallel: the MPI module is not installed (looked for " + tried + ")");
+  const ModuleLocation location{.what = "parallel",
+                                .description = "MPI module",
+                                .env_variable = "RELIEF_PARALLEL_MODULE",
+                                .build_path = RELIEF_PARALLEL_MODULE_BUILD_PATH};
+  void* open = RELIEF_TRY(load_module_symbol(location, kOpenTransportSymbol, SymbolScope::global));
+  return reinterpret_cast<OpenTransport>(open);
 }
 
 }  // namespace

@@ -1,6 +1,5 @@
 #include "relief/video/video_writer.h"
 
-#include <dlfcn.h>
 #include <sys/resource.h>
 #include <unistd.h>
 
@@ -21,6 +20,7 @@
 #include "codecs.h"
 #include "encoder.h"
 #include "relief/base/file_io.h"
+#include "relief/base/module.h"
 
 namespace relief::video {
 
@@ -32,40 +32,19 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-// Where the encoder module may be: $RELIEF_VIDEO_MODULE, then beside an
-// installed program (bin/../lib/relief/), then the build tree.
-std::vector<fs::path> module_candidates() {
-  std::vector<fs::path> paths;
-  if (const char* env = std::getenv("RELIEF_VIDEO_MODULE"); env && *env) paths.emplace_back(env);
-  std::error_code ec;
-  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
-  if (!ec)
-    paths.push_back(exe.parent_path().parent_path() / RELIEF_VIDEO_MODULE_INSTALL_SUBDIR /
-                    RELIEF_VIDEO_MODULE_NAME);
-  paths.emplace_back(RELIEF_VIDEO_MODULE_BUILD_PATH);
-  return paths;
-}
-
 // The encoder module, loaded once, on the first movie (encoder.h says why).
 Result<OpenEncoder> load_encoder() {
   static std::mutex mutex;
   static OpenEncoder open = nullptr;
   std::lock_guard lock(mutex);
   if (open) return open;
-  std::string tried;
-  for (const fs::path& path : module_candidates()) {
-    std::error_code ec;
-    if (!fs::exists(path, ec)) {
-      tried += (tried.empty() ? "" : ", ") + path.string();
-      continue;
-    }
-    void* module = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);  // kept for the process's life
-    if (!module) return fail(fmt::format("video: cannot load {}: {}", path.string(), dlerror()));
-    open = reinterpret_cast<OpenEncoder>(dlsym(module, kOpenEncoderSymbol));
-    if (!open) return fail(fmt::format("video: {} has no {}", path.string(), kOpenEncoderSymbol));
-    return open;
-  }
-  return fail("video: the FFmpeg encoder module is not installed (looked for " + tried + ")");
+  const ModuleLocation location{.what = "video",
+                                .description = "FFmpeg encoder module",
+                                .env_variable = "RELIEF_VIDEO_MODULE",
+                                .build_path = RELIEF_VIDEO_MODULE_BUILD_PATH};
+  void* symbol = RELIEF_TRY(load_module_symbol(location, kOpenEncoderSymbol, SymbolScope::local));
+  open = reinterpret_cast<OpenEncoder>(symbol);
+  return open;
 }
 
 // The encoder's thread (and the codec's own threads, which inherit it) runs
