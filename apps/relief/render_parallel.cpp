@@ -242,13 +242,13 @@ class Run {
     RELIEF_CHECK(renderer->select(view));
     stats.select_ms = ms_since(began);
 
-    std::vector<uint8_t> keep;
+    std::vector<parallel::TriangleRange> keep;
     if (mode_.kind == ParallelMode::Kind::sort_last) {
       std::vector<geo::TileKey> keys;
       for (const lod::SelectedQuad& q : renderer->selection().quads) keys.push_back(q.key);
-      const std::vector<int> owner = parallel::assign_quads(
-          keys, renderer->quad_triangles(), setup.store.manifest().extent, mode_.quads, n);
-      for (int o : owner) keep.push_back(o == me);
+      keep =
+          parallel::rank_triangles(keys, renderer->quad_triangles(), setup.store.manifest().extent,
+                                   mode_.quads, n, me, renderer->splits_quads());
     } else {
       keep = RELIEF_TRY(renderer->quads_in_window(view));
     }

@@ -201,17 +201,16 @@ TEST(Parallel, APathEqualsTheSingleProcessFrames) {
   EXPECT_EQ(stats["frames"][3]["ranks"].size(), 2u);
 }
 
-nlohmann::json stats_of(int ranks, const std::string& mode, ScratchDir& dir) {
-  const fs::path stats = dir / (mode.substr(10) + ".json");
-  auto r =
-      parallel_render(ranks, mode, dir / "out.png", {"--stats", stats.string(), "--lod", "quads"});
+nlohmann::json stats_of(int ranks, const std::string& mode, ScratchDir& dir,
+                        const std::string& lod = "quads") {
+  const fs::path stats = dir / (mode.substr(10) + lod + ".json");
+  auto r = parallel_render(ranks, mode, dir / "out.png", {"--stats", stats.string(), "--lod", lod});
   EXPECT_EQ(r.exit_code, 0) << r.err;
   return nlohmann::json::parse(*read_text_file(stats));
 }
 
 // With --lod quads every quad has about the same triangles, the seed's
-// K-patches (edge-mark quads vary tenfold, and 72 of them over 4 ranks cannot
-// be cut finer than a quad: ~8 % here).
+// K-patches, each drawn whole.
 TEST(Parallel, ActivePatchesBalanceTrianglesBetterThanBlocks) {
   ScratchDir dir("parallel_balance");
   const nlohmann::json active = stats_of(4, "sort-last:active", dir);
@@ -228,6 +227,17 @@ TEST(Parallel, ActivePatchesBalanceTrianglesBetterThanBlocks) {
   EXPECT_EQ(total, block_total);  // the same selection, split differently
   EXPECT_LT(active["triangle_imbalance"].get<double>(), 0.05);
   EXPECT_LT(active["triangle_imbalance"].get<double>(), block["triangle_imbalance"].get<double>());
+}
+
+// Edge-mark quads vary tenfold (72 of them over 4 ranks, whole, gave ~8 %
+// here): active-patch enumeration splits the quads on a cut between ranks,
+// so the balance is exact to a triangle, and the image stays the single
+// process's (EveryMode).
+TEST(Parallel, ActivePatchesSplitEdgeMarkQuadsToBalance) {
+  ScratchDir dir("parallel_balance_marks");
+  const nlohmann::json active = stats_of(4, "sort-last:active", dir, "edge-marks");
+  ASSERT_EQ(active["ranks"].size(), 4u);
+  EXPECT_LT(active["triangle_imbalance"].get<double>(), 1e-3);
 }
 
 // A 2 x 2 wall of 150 x 110 displays with bezels: each display shows its

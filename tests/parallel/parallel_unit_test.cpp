@@ -107,6 +107,61 @@ TEST(QuadSplit, ActivePatchesBalanceTrianglesWhereBlocksDoNot) {
   }
 }
 
+// Split quads: the ranks' ranges cover every triangle of every quad exactly
+// once and balance to one triangle, even with a quad much larger than the
+// rest (edge-mark meshes); unsplit, such a quad limits the balance.
+TEST(QuadSplit, SplitActivePatchesBalanceToOneTriangle) {
+  const geo::GeoBox extent{1, 42, 2, 43};
+  Front f = uneven_front(extent);
+  // One quad with three times the triangles of all others together.
+  f.triangles[f.triangles.size() / 2] =
+      3 * std::accumulate(f.triangles.begin(), f.triangles.end(), uint64_t{0});
+  const uint64_t total = std::accumulate(f.triangles.begin(), f.triangles.end(), uint64_t{0});
+  for (int ranks : {2, 3, 4, 7}) {
+    std::vector<uint64_t> drawn(f.keys.size(), 0), split(ranks, 0), whole(ranks, 0);
+    for (int r = 0; r < ranks; ++r) {
+      const auto mine = rank_triangles(f.keys, f.triangles, extent, QuadSplit::active, ranks, r,
+                                       /*split_quads=*/true);
+      ASSERT_EQ(mine.size(), f.keys.size());
+      std::vector<uint64_t> next_first(f.keys.size(), 0);
+      for (size_t i = 0; i < mine.size(); ++i) {
+        if (mine[i].count == 0) continue;
+        // Ranks take consecutive pieces of a quad, in rank order.
+        EXPECT_EQ(mine[i].first, drawn[i]) << ranks << " ranks, rank " << r << ", quad " << i;
+        drawn[i] += mine[i].count;
+        split[static_cast<size_t>(r)] += mine[i].count;
+      }
+      for (const TriangleRange& t :
+           rank_triangles(f.keys, f.triangles, extent, QuadSplit::active, ranks, r, false)) {
+        EXPECT_TRUE(t.count == 0 || t.first == 0);
+        whole[static_cast<size_t>(r)] += t.count;
+      }
+    }
+    EXPECT_EQ(drawn, f.triangles) << ranks;
+    EXPECT_EQ(std::accumulate(split.begin(), split.end(), uint64_t{0}), total);
+    for (uint64_t t : split) EXPECT_LE(t - total / ranks, 1u) << ranks;
+    EXPECT_LT(imbalance(split), 1e-4) << ranks;
+    EXPECT_GT(imbalance(whole), 0.4) << ranks;  // the giant, unsplit
+  }
+}
+
+// Block and quadtree never split: each quad whole on the rank assign_quads names.
+TEST(QuadSplit, BlockAndQuadtreeDrawWholeQuads) {
+  const geo::GeoBox extent{1, 42, 2, 43};
+  const Front f = uneven_front(extent);
+  for (QuadSplit split : {QuadSplit::block, QuadSplit::quadtree}) {
+    const std::vector<int> owner = assign_quads(f.keys, f.triangles, extent, split, 3);
+    for (int r = 0; r < 3; ++r) {
+      const auto mine = rank_triangles(f.keys, f.triangles, extent, split, 3, r, true);
+      for (size_t i = 0; i < mine.size(); ++i) {
+        const TriangleRange expected =
+            owner[i] == r ? TriangleRange{0, f.triangles[i]} : TriangleRange{};
+        EXPECT_EQ(mine[i], expected);
+      }
+    }
+  }
+}
+
 TEST(Wall, DisplaysSkipTheBezelsAndTakeTheirOffsets) {
   auto w = parse_wall(
       R"({"rows": 2, "columns": 3, "display": [100, 80], "bezel": [10, 6],

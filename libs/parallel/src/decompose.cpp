@@ -32,6 +32,18 @@ uint32_t quadtree_index(const geo::TileKey& key, const geo::GeoBox& extent) {
   return code;
 }
 
+// The quads' indices in quadtree order: coherent pieces of terrain per rank.
+std::vector<size_t> quadtree_order(std::span<const geo::TileKey> quads, const geo::GeoBox& extent) {
+  std::vector<size_t> order(quads.size());
+  std::iota(order.begin(), order.end(), size_t{0});
+  std::vector<uint32_t> code(quads.size());
+  for (size_t i = 0; i < quads.size(); ++i) code[i] = quadtree_index(quads[i], extent);
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+    return std::tie(code[a], quads[a]) < std::tie(code[b], quads[b]);
+  });
+  return order;
+}
+
 int range_of(double position, int ranks) {
   return std::clamp(static_cast<int>(position * ranks), 0, ranks - 1);
 }
@@ -136,16 +148,9 @@ std::vector<int> assign_quads(std::span<const geo::TileKey> quads,
     }
     return owner;
   }
-  // Active patches: the front of selected quads, enumerated in quadtree
-  // order (coherent pieces of terrain per rank), cut into ranges of equal
-  // triangle counts; each quad goes where the middle of its triangles falls.
-  std::vector<size_t> order(quads.size());
-  std::iota(order.begin(), order.end(), size_t{0});
-  std::vector<uint32_t> code(quads.size());
-  for (size_t i = 0; i < quads.size(); ++i) code[i] = quadtree_index(quads[i], extent);
-  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
-    return std::tie(code[a], quads[a]) < std::tie(code[b], quads[b]);
-  });
+  // Active patches whole: each quad goes where the middle of its triangles
+  // falls in the quadtree-ordered run (rank_triangles without splitting).
+  const std::vector<size_t> order = quadtree_order(quads, extent);
   const double total =
       static_cast<double>(std::accumulate(triangles.begin(), triangles.end(), uint64_t{0}));
   double before = 0;
@@ -155,6 +160,36 @@ std::vector<int> assign_quads(std::span<const geo::TileKey> quads,
     before += t;
   }
   return owner;
+}
+
+std::vector<TriangleRange> rank_triangles(std::span<const geo::TileKey> quads,
+                                          std::span<const uint64_t> triangles,
+                                          const geo::GeoBox& extent, QuadSplit split, int ranks,
+                                          int rank, bool split_quads) {
+  std::vector<TriangleRange> mine(quads.size());
+  if (split != QuadSplit::active || !split_quads || ranks <= 1) {
+    const std::vector<int> owner = assign_quads(quads, triangles, extent, split, ranks);
+    for (size_t i = 0; i < quads.size(); ++i) {
+      if (owner[i] == rank) mine[i] = {0, triangles[i]};
+    }
+    return mine;
+  }
+  // The quadtree-ordered run of every triangle, cut at total * r / ranks:
+  // rank r draws [begin, end) of it, the quads on a cut in part.
+  const uint64_t total = std::accumulate(triangles.begin(), triangles.end(), uint64_t{0});
+  const auto cut = [&](int r) {
+    return static_cast<uint64_t>(
+        (static_cast<unsigned __int128>(total) * static_cast<unsigned>(r)) /
+        static_cast<unsigned>(ranks));
+  };
+  const uint64_t begin = cut(rank), end = cut(rank + 1);
+  uint64_t before = 0;
+  for (size_t i : quadtree_order(quads, extent)) {
+    const uint64_t lo = std::max(before, begin), hi = std::min(before + triangles[i], end);
+    if (lo < hi) mine[i] = {lo - before, hi - lo};
+    before += triangles[i];
+  }
+  return mine;
 }
 
 double imbalance(std::span<const uint64_t> per_rank) {

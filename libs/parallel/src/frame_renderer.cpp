@@ -1,5 +1,6 @@
 #include "relief/parallel/frame_renderer.h"
 
+#include <cassert>
 #include <cmath>
 
 #include "relief/lod/terrain_model.h"
@@ -65,8 +66,10 @@ std::vector<uint64_t> FrameRenderer::quad_triangles() const {
   return out;
 }
 
-Result<std::vector<uint8_t>> FrameRenderer::quads_in_window(const lod::View& view) {
-  std::vector<uint8_t> keep(selection_.quads.size(), 1);
+Result<std::vector<TriangleRange>> FrameRenderer::quads_in_window(const lod::View& view) {
+  const std::vector<uint64_t> triangles = quad_triangles();
+  std::vector<TriangleRange> keep(triangles.size());
+  for (size_t i = 0; i < keep.size(); ++i) keep[i] = {0, triangles[i]};
   // Boxes bound the unexaggerated surface only.
   if (view.window.empty() || options_.render.exaggeration != 1.0f) return keep;
   const std::array<lod::Plane, 5> planes = lod::window_planes(view);
@@ -76,12 +79,13 @@ Result<std::vector<uint8_t>> FrameRenderer::quads_in_window(const lod::View& vie
     const lod::Vec3 lo = info->box.lo, hi = info->box.hi;
     const double pad = 0.01 * length(hi - lo) + 10;
     const lod::Vec3 p{pad, pad, pad};
-    keep[i] = !lod::outside(planes, lo - p, hi + p);
+    if (lod::outside(planes, lo - p, hi + p)) keep[i] = {};
   }
   return keep;
 }
 
-Result<render::FrameStats> FrameRenderer::draw(const lod::View& view, std::span<const uint8_t> keep,
+Result<render::FrameStats> FrameRenderer::draw(const lod::View& view,
+                                               std::span<const TriangleRange> parts,
                                                render::RenderTarget& target) {
   lod::Selection part;
   part.stats = selection_.stats;
@@ -93,9 +97,20 @@ Result<render::FrameStats> FrameRenderer::draw(const lod::View& view, std::span<
     refined_part->stats = refined_->stats;
   }
   for (size_t i = 0; i < selection_.quads.size(); ++i) {
-    if (!keep[i]) continue;
+    const TriangleRange& range = parts[i];
+    if (range.count == 0) continue;
     part.quads.push_back(selection_.quads[i]);
-    if (refined_) refined_part->quads.push_back(refined_->quads[i]);
+    if (refined_) {
+      lod::RefinedQuad q = refined_->quads[i];
+      assert(3 * (range.first + range.count) <= q.index_count);
+      q.first_index += static_cast<uint32_t>(3 * range.first);
+      q.index_count = static_cast<uint32_t>(3 * range.count);
+      refined_part->quads.push_back(q);
+    } else {
+      // A fixed mesh is drawn whole (splits_quads() is false).
+      assert(range.first == 0 &&
+             range.count == mesh_.index_count(selection_.quads[i].finer_sides) / 3);
+    }
   }
   part.stats.quads = static_cast<uint32_t>(part.quads.size());
   return renderer_->draw(view, part, target, options_.render,

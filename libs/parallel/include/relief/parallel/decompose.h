@@ -48,6 +48,26 @@ std::vector<int> assign_quads(std::span<const geo::TileKey> quads,
                               std::span<const uint64_t> triangles, const geo::GeoBox& extent,
                               QuadSplit split, int ranks);
 
+// The part of a selected quad's triangles that a rank draws: `count` from
+// `first`, in the order of the quad's mesh (count 0: none of them).
+struct TriangleRange {
+  uint64_t first = 0;
+  uint64_t count = 0;
+  friend bool operator==(const TriangleRange&, const TriangleRange&) = default;
+};
+
+// The triangles of each quad that `rank` draws. Block and quadtree give every
+// quad whole to one rank (assign_quads), and so does active unless
+// `split_quads`: then the quads' triangles, in quadtree order, are cut into
+// `ranks` runs of equal length (to one triangle), and a quad on a cut is
+// drawn in part by each rank it straddles. A mesh whose quads are ranges of
+// one index buffer (edge marks) can be split so; a few large quads then no
+// longer limit the balance.
+std::vector<TriangleRange> rank_triangles(std::span<const geo::TileKey> quads,
+                                          std::span<const uint64_t> triangles,
+                                          const geo::GeoBox& extent, QuadSplit split, int ranks,
+                                          int rank, bool split_quads);
+
 // Load imbalance of per-rank work: max / mean - 1 (0 for a perfect balance).
 double imbalance(std::span<const uint64_t> per_rank);
 

@@ -19,6 +19,7 @@
 #include "relief/lod/camera.h"
 #include "relief/lod/refine.h"
 #include "relief/lod/selection.h"
+#include "relief/parallel/decompose.h"
 #include "relief/render/render_target.h"
 #include "relief/render/terrain_renderer.h"
 #include "relief/view/scene.h"
@@ -41,13 +42,16 @@ class FrameRenderer {
   const lod::RefinedMesh* refined() const { return refined_ ? &*refined_ : nullptr; }
   // Triangles of each selected quad.
   std::vector<uint64_t> quad_triangles() const;
-  // Which selected quads can reach `view`'s window (conservative: their
-  // bounding boxes meet its sub-frustum); all of them without a window.
-  Result<std::vector<uint8_t>> quads_in_window(const lod::View& view);
+  // Whether a quad's triangles can be drawn in part (edge-mark meshes, one
+  // index range per quad), so rank_triangles may split quads.
+  bool splits_quads() const { return refined_.has_value(); }
+  // The selected quads that can reach `view`'s window, whole (conservative:
+  // their bounding boxes meet its sub-frustum); all of them without a window.
+  Result<std::vector<TriangleRange>> quads_in_window(const lod::View& view);
 
-  // Draws the selected quads with keep[i] set through `view` (the selected
-  // view, or it with a window) into `target` (the window's size).
-  Result<render::FrameStats> draw(const lod::View& view, std::span<const uint8_t> keep,
+  // Draws parts[i] of each selected quad i through `view` (the selected view,
+  // or it with a window) into `target` (the window's size).
+  Result<render::FrameStats> draw(const lod::View& view, std::span<const TriangleRange> parts,
                                   render::RenderTarget& target);
 
  private:
