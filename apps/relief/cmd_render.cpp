@@ -55,6 +55,8 @@ options:
                      (repeatable; same tile size and finest level)
   --fuse first|mean  how elevation layers fuse: the first valid sample in the
                      order given (default), or the mean of the valid ones
+  --weights W1,W2,...  with --fuse mean: one weight > 0 per elevation layer
+                     (STORE first), as relief fuse --weights
   --imagery STORE2   drape an imagery store; otherwise hypsometric colours with hillshade
   --size WxH         image size in pixels (default 1024x768)
   --fov DEG          vertical field of view (default 60)

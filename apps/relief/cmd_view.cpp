@@ -32,7 +32,9 @@ display, `relief render` draws stills and camera paths headless.
 
 Keys: Tab or F1 panels, F8 vsync, F9 start/stop recording, F10 export the
 recorded path, F11 fullscreen, F12 screenshot (terrain only, PNG), Escape quit;
-the control mode takes the rest.
+the control mode takes the rest. A left drag that starts inside a lens's
+circle (--lens) moves the lens over the terrain; with Control held, or outside
+every lens, it goes to the control mode.
 
   --camera LON,LAT,HEIGHT,HEADING,PITCH,ROLL   the start (as relief render)
   --look-at LON,LAT,HEIGHT,RANGE,HEADING,PITCH  (default: the whole store)
@@ -41,6 +43,8 @@ options:
                      (repeatable; same tile size and finest level)
   --fuse first|mean  how elevation layers fuse: the first valid sample in the
                      order given (default), or the mean of the valid ones
+  --weights W1,W2,...  with --fuse mean: one weight > 0 per elevation layer
+                     (STORE first), as relief fuse --weights
   --imagery STORE2   drape an imagery store (a layer the panels switch on and off)
   --size WxH         window size in pixels (default 1024x768)
   --mode M           orbit (default), aircraft, walk or motorbike

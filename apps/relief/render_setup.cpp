@@ -49,6 +49,16 @@ Result<tiles::Store> fuse_elevation_options(const Args& args, const std::string&
       return fail("--fuse: '" + *text + "' is none of first, mean");
     }
   }
+  // One weight per layer (STORE, then each --elevation), checked as `relief
+  // fuse --weights` checks its own (pipeline::fuse_weights).
+  std::vector<double> weights;
+  if (auto text = args.get("--weights")) {
+    if (mode != pipeline::FuseMode::Blend) {
+      return fail("--weights: weighs the mean of the layers; give --fuse mean");
+    }
+    weights = RELIEF_TRY(parse_numbers("--weights", *text));
+    weights = RELIEF_TRY(pipeline::fuse_weights(weights, 1 + more.size(), "elevation layers"));
+  }
   if (more.empty()) return first;
   std::vector<pipeline::ElevationLayer> layers;
   layers.push_back({first_name, std::move(first)});
@@ -57,14 +67,14 @@ Result<tiles::Store> fuse_elevation_options(const Args& args, const std::string&
         {path, RELIEF_TRY(open_kind(path, tiles::DatasetKind::Elevation, "--elevation", access))});
   }
   ThreadExecutor executor;
-  return pipeline::fuse_elevation_layers(std::move(layers), mode, executor);
+  return pipeline::fuse_elevation_layers(std::move(layers), mode, executor, std::move(weights));
 }
 
 std::vector<OptionSpec> with_scene_options(std::vector<OptionSpec> own) {
   for (const char* name :
-       {"--imagery", "--detect-level", "--detect-sensitivity", "--elevation", "--fuse", "--camera",
-        "--look-at", "--size", "--fov", "--pixel-error", "--exaggeration", "--lod", "--sky",
-        "--gpu-budget", "--cache", "--cache-size"}) {
+       {"--imagery", "--detect-level", "--detect-sensitivity", "--elevation", "--fuse", "--weights",
+        "--camera", "--look-at", "--size", "--fov", "--pixel-error", "--exaggeration", "--lod",
+        "--sky", "--gpu-budget", "--cache", "--cache-size"}) {
     own.emplace_back(name);
   }
   own.emplace_back("--detect", "", false);

@@ -48,7 +48,8 @@ inline const tiles::Store* elevation_of(const RenderSetup& s) {
   return s.has_elevation ? &s.store : nullptr;
 }
 
-// `--elevation STORE` (repeatable) and `--fuse first|mean`: `first` alone, or
+// `--elevation STORE` (repeatable), `--fuse first|mean` and `--weights
+// W1,W2,...` (the mean's, one per layer): `first` alone, or
 // the elevation layers first, then each --elevation, fused at draw time
 // (pipeline/fused_elevation.h). Shared by `relief render` and `relief view`.
 Result<tiles::Store> fuse_elevation_options(const Args& args, const std::string& first_name,

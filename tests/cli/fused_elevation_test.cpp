@@ -87,6 +87,27 @@ TEST_F(FusedElevation, TwoLayersDrawTheStillOfTheStoreBuiltFromBoth) {
   }
 }
 
+// `--fuse mean --weights 3,1` draws the still of the store `relief fuse
+// --weights 3,1` writes from the same two stores, pixel for pixel: the same
+// samples and geometric errors (tests/pipeline/fused_elevation_test.cpp);
+// only the index bounds differ (the offline store's come from its inputs'
+// indexes, the draw-time ones from the fused samples), and not so as to
+// change this view's quads.
+TEST_F(FusedElevation, WeightedLayersDrawTheStillOfReliefFuseWeights) {
+  ASSERT_EQ(run_relief(
+                {"fuse", path("n41"), path("n42"), "--weights", "3,1", "-q", "-o", path("fused31")})
+                .exit_code,
+            0);
+  const std::string camera = "1.5,42.0,1000,60000,0,-40";
+  const Image offline = render({path("fused31")}, camera, "offline31.png");
+  const Image drawn =
+      render({path("n41"), "--elevation", path("n42"), "--fuse", "mean", "--weights", "3,1"},
+             camera, "drawn31.png");
+  size_t off = 0;
+  for (size_t i = 0; i < offline.rgba.size(); ++i) off += offline.rgba[i] != drawn.rgba[i];
+  EXPECT_EQ(off, 0u) << off << " channels differ";
+}
+
 TEST_F(FusedElevation, BadLayersAreOneLineErrors) {
   const std::string out = path("bad.png");
   const std::string cam = "1.5,42.0,1000,60000,0,-40";
@@ -98,6 +119,21 @@ TEST_F(FusedElevation, BadLayersAreOneLineErrors) {
       {{path("n41"), "--elevation", path("rgb")}, "--elevation must be an elevation store"},
       {{path("n41"), "--elevation", path("missing")}, "missing"},
       {{path("n41"), "--elevation", path("n42"), "--fuse", "max"}, "--fuse: 'max' is none of"},
+      {{path("n41"), "--elevation", path("n42"), "--fuse", "mean", "--weights", "1"},
+       "--weights: 1 weights for 2 elevation layers"},
+      {{path("n41"), "--elevation", path("n42"), "--fuse", "mean", "--weights", "1,2,3"},
+       "--weights: 3 weights for 2 elevation layers"},
+      {{path("n41"), "--elevation", path("n42"), "--fuse", "mean", "--weights", "1,-2"},
+       "--weights: -2 is not > 0"},
+      {{path("n41"), "--elevation", path("n42"), "--fuse", "mean", "--weights", "0,0"},
+       "--weights: 0 is not > 0"},
+      {{path("n41"), "--elevation", path("n42"), "--fuse", "mean", "--weights", "1,inf"},
+       "--weights: 'inf' is not a number"},
+      {{path("n41"), "--elevation", path("n42"), "--fuse", "mean", "--weights", "1,nan"},
+       "--weights: 'nan' is not a number"},
+      {{path("n41"), "--elevation", path("n42"), "--weights", "1,2"}, "give --fuse mean"},
+      {{path("n41"), "--elevation", path("n42"), "--fuse", "first", "--weights", "1,2"},
+       "give --fuse mean"},
   };
   for (const Case& c : cases) {
     std::vector<std::string> args = {"render"};

@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <thread>
 
 #include <fmt/format.h>
@@ -19,6 +20,9 @@
 #include "../support/test_support.h"
 #include "../video/movie_probe.h"
 #include "relief/base/manual_clock.h"
+#include "relief/lod/vec.h"
+#include "relief/view/ground.h"
+#include "relief/view/lens_drag.h"
 #include "relief/window/viewer.h"
 #include "relief/window/window.h"
 
@@ -356,6 +360,121 @@ TEST_F(WindowTest, PanelsAreDrawnOverTheFrameButNotInScreenshots) {
   frame = window_->target().read_rgba();
   ASSERT_TRUE(frame);
   EXPECT_EQ(differing_pixels(*frame, *screen), 0u) << "without panels the screen is the frame";
+}
+
+// A lens of a texture layer (the Pyrenees heights as a single-band layer, a
+// mean filter inside a 3 km circle) is grabbed by a left press inside its
+// circle and follows the terrain point under the cursor: after the release
+// its centre is the point picked under the release position (within 1 m: the
+// same pick, on the same resident ground, from the same camera, which the
+// drag leaves alone). A drag starting outside every lens, or inside one with
+// Control held, still turns the view and leaves the lens where it is.
+TEST_F(WindowTest, ALensIsDraggedOnTheTerrainWhileOtherDragsStillTurnTheView) {
+  ManualClock clock;
+  ViewerOptions o;
+  o.start = kCamera;
+  o.collect_frames = true;
+  o.idle_wait_seconds = 0;
+  o.panels = false;
+  view::SceneOptions so;
+  so.mesh_level = 3;
+  // Frames stepped deterministically: no wall-clock budget on processing.
+  so.render.processing_per_frame = std::numeric_limits<double>::infinity();
+  render::TextureLayer layer;
+  layer.store = &testing::pyrenees_store();
+  layer.range_max = 3000;
+  auto mean = gpuprocess::make_step("mean", {"radius=2"});
+  ASSERT_TRUE(mean) << mean.error().message;
+  layer.lenses.push_back({1.5, 42.5, 3000, {{*mean}}});
+  so.texture_layers = {layer};
+  so.selection.texture = layer.store;
+  auto created = Viewer::create(*window_, &testing::pyrenees_store(), nullptr, so, o, clock);
+  ASSERT_TRUE(created) << created.error().message;
+  Viewer& v = **created;
+  for (int i = 0; i < 6000 && !v.summary().complete; ++i) {
+    clock.advance(10ms);
+    ASSERT_TRUE(v.frame());
+    std::this_thread::sleep_for(1ms);
+  }
+  ASSERT_TRUE(v.summary().complete);
+  const lod::Camera camera = v.summary().frames_list.back().camera;
+  auto lens = [&v] { return v.scene().options().texture_layers[0].lenses[0]; };
+  auto pick = [&](const lod::Camera& c, double x, double y) {
+    auto p = view::pick(c, x, y, view::resident_ground(v.scene()));
+    EXPECT_TRUE(p) << x << ", " << y << " shows the sky";
+    return p.value_or(view::Pick{});
+  };
+  auto inside = [&](const lod::Camera& c, double x, double y) {
+    const view::Pick p = pick(c, x, y);
+    return view::lens_at(v.scene().options().texture_layers, p.lon, p.lat).has_value();
+  };
+  // Where the lens centre shows.
+  auto centre_on_screen = [&](const lod::Camera& c) {
+    auto view = lod::make_view(c);
+    EXPECT_TRUE(view);
+    const render::Lens l = lens();
+    const double h = view::resident_ground(v.scene())(l.lon, l.lat).value_or(0.0);
+    double x = -1, y = -1;
+    EXPECT_TRUE(view && view->project(lod::ecef(l.lon, l.lat, h), x, y));
+    return std::pair{x, y};
+  };
+  auto deliver = [&](Type type, double x, double y, uint8_t modifiers = 0) {
+    view::InputEvent e;
+    e.type = type, e.x = x, e.y = y, e.modifiers = modifiers;
+    window_->deliver(e);
+  };
+  auto step = [&] {
+    clock.advance(10ms);
+    ASSERT_TRUE(v.frame());
+  };
+  auto last_camera = [&v] { return v.summary().frames_list.back().camera; };
+  auto same_camera = [](const lod::Camera& a, const lod::Camera& b) {
+    return a.lon == b.lon && a.lat == b.lat && a.height == b.height && a.heading == b.heading &&
+           a.pitch == b.pitch && a.roll == b.roll;
+  };
+  const auto [cx, cy] = centre_on_screen(camera);
+  ASSERT_TRUE(inside(camera, cx, cy));
+
+  // The drag: the lens follows the cursor at each frame.
+  deliver(Type::cursor, cx, cy);
+  deliver(Type::mouse_down, cx, cy);
+  step();
+  deliver(Type::cursor, cx + 30, cy + 20);
+  step();
+  view::Pick at = pick(camera, cx + 30, cy + 20);
+  EXPECT_LT(view::lens_distance_m(at.lon, at.lat, lens().lon, lens().lat), 1.0);
+  deliver(Type::cursor, cx + 60, cy + 40);
+  deliver(Type::mouse_up, cx + 60, cy + 40);
+  step();
+  at = pick(camera, cx + 60, cy + 40);
+  EXPECT_LT(view::lens_distance_m(at.lon, at.lat, lens().lon, lens().lat), 1.0);
+  EXPECT_GT(view::lens_distance_m(1.5, 42.5, lens().lon, lens().lat), 3000.0) << "it moved";
+  EXPECT_TRUE(same_camera(camera, last_camera())) << "the drag left the camera alone";
+  // Released: cursor moves no longer move it.
+  const render::Lens dropped = lens();
+  deliver(Type::cursor, cx - 40, cy);
+  step();
+  EXPECT_EQ(lens().lon, dropped.lon);
+  EXPECT_EQ(lens().lat, dropped.lat);
+
+  // Inside the lens with Control held, and outside every lens, a drag turns
+  // the view about the point under the cursor as before (orbit: 40 px to the
+  // right turn it 10 degrees).
+  for (const uint8_t modifiers : {uint8_t{view::kControl}, uint8_t{0}}) {
+    const lod::Camera before = last_camera();
+    auto [x, y] = centre_on_screen(before);
+    if (!modifiers) x -= 120;  // well outside the 3 km circle (~20 px in radius here)
+    ASSERT_EQ(inside(before, x, y), modifiers != 0) << x << ", " << y;
+    deliver(Type::cursor, x, y);
+    deliver(Type::mouse_down, x, y, modifiers);
+    deliver(Type::cursor, x + 40, y, modifiers);
+    deliver(Type::mouse_up, x + 40, y, modifiers);
+    step();
+    EXPECT_NEAR(std::remainder(last_camera().heading - before.heading, 360.0), -10.0, 0.5)
+        << int{modifiers};
+    EXPECT_EQ(lens().lon, dropped.lon);
+    EXPECT_EQ(lens().lat, dropped.lat);
+  }
 }
 
 // ---- the command line -------------------------------------------------------

@@ -90,21 +90,8 @@ geo::TileKey ancestor_at(geo::TileKey key, int level) {
 
 Result<FuseReport> fuse_stores(const FuseOptions& o, Executor& executor, Progress& progress) {
   if (o.inputs.size() < 2) return fail("fuse: needs at least two input stores");
-  std::vector<double> weights = o.weights;
-  if (weights.empty()) weights.assign(o.inputs.size(), 1.0);
-  if (weights.size() != o.inputs.size()) {
-    return fail(
-        fmt::format("--weights: {} weights for {} inputs", weights.size(), o.inputs.size()));
-  }
-  for (double w : weights) {
-    if (!(w > 0) || !std::isfinite(w)) {
-      return fail(fmt::format("--weights: {} is not > 0 and finite", w));
-    }
-  }
-  // Only the ratios matter: scaled to at most 1, weighted sums of float
-  // samples cannot overflow (1e308 + 1e308 would be inf, and inf / inf NaN).
-  const double largest = *std::max_element(weights.begin(), weights.end());
-  for (double& w : weights) w /= largest;
+  const std::vector<double> weights =
+      RELIEF_TRY(fuse_weights(o.weights, o.inputs.size(), "inputs"));
   std::vector<tiles::Store> stores;
   for (const auto& path : o.inputs) {
     stores.push_back(RELIEF_TRY(tiles::Store::open(path)));

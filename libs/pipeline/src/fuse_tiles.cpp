@@ -3,7 +3,26 @@
 #include <algorithm>
 #include <cmath>
 
+#include <fmt/format.h>
+
 namespace relief::pipeline {
+
+Result<std::vector<double>> fuse_weights(std::vector<double> weights, size_t inputs,
+                                         const std::string& inputs_name) {
+  if (weights.empty()) weights.assign(inputs, 1.0);
+  if (weights.size() != inputs) {
+    return fail(
+        fmt::format("--weights: {} weights for {} {}", weights.size(), inputs, inputs_name));
+  }
+  for (double w : weights) {
+    if (!(w > 0) || !std::isfinite(w)) {
+      return fail(fmt::format("--weights: {} is not > 0 and finite", w));
+    }
+  }
+  const double largest = *std::max_element(weights.begin(), weights.end());
+  for (double& w : weights) w /= largest;
+  return weights;
+}
 
 void fuse_float(const std::vector<const tiles::Raster*>& in, const std::vector<double>& weights,
                 FuseMode mode, tiles::Raster& out) {

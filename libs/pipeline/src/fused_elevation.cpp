@@ -1,13 +1,17 @@
 #include "relief/pipeline/fused_elevation.h"
 
 #include <cmath>
+#include <functional>
+#include <map>
 #include <memory>
+#include <mutex>
+#include <optional>
 #include <set>
 #include <unordered_map>
+#include <unordered_set>
 
 #include <fmt/format.h>
 
-#include "relief/base/first_error.h"
 #include "relief/base/progress.h"
 #include "relief/tiles/geometric_error.h"
 #include "relief/tiles/store_layout.h"
@@ -16,6 +20,42 @@ namespace relief::pipeline {
 namespace {
 
 using RasterPtr = std::shared_ptr<const tiles::Raster>;
+
+// Layer tiles read while the layers are opened. The error pass compares every
+// finest tile with each of its ancestors, and upsampled tiles share their
+// source tile: the layer tiles with a child in the fused store are kept until
+// the indexes are built, so that opening reads every layer tile once (the
+// others are read once anyway). Concurrent requests for one tile wait for
+// one read.
+class OpenCache {
+ public:
+  explicit OpenCache(std::unordered_set<geo::TileKey, geo::TileKeyHash> keep)
+      : keep_(std::move(keep)) {}
+
+  Result<RasterPtr> get(size_t layer, const geo::TileKey& key,
+                        const std::function<Result<RasterPtr>()>& read) {
+    if (!keep_.contains(key)) return read();
+    std::shared_ptr<Slot> slot;
+    {
+      std::lock_guard lock(mutex_);
+      std::shared_ptr<Slot>& s = slots_[{layer, key}];
+      if (!s) s = std::make_shared<Slot>();
+      slot = s;
+    }
+    std::lock_guard lock(slot->mutex);
+    if (!slot->value) slot->value = read();
+    return *slot->value;
+  }
+
+ private:
+  struct Slot {
+    std::mutex mutex;
+    std::optional<Result<RasterPtr>> value;
+  };
+  std::unordered_set<geo::TileKey, geo::TileKeyHash> keep_;
+  std::mutex mutex_;
+  std::map<std::pair<size_t, geo::TileKey>, std::shared_ptr<Slot>> slots_;
+};
 
 struct Layers {
   std::vector<ElevationLayer> layers;
@@ -31,38 +71,62 @@ struct Layers {
   // the order given.
   std::vector<size_t> order;
 
+  // Layer i's own tile at `key` (through `cache` while opening).
+  Result<RasterPtr> read(size_t i, const geo::TileKey& key, OpenCache* cache) const {
+    auto read_once = [this, i, &key]() -> Result<RasterPtr> {
+      return std::make_shared<const tiles::Raster>(
+          RELIEF_TRY(layers[i].store.read_tile(key)).raster);
+    };
+    return cache ? cache->get(i, key, read_once) : read_once();
+  }
+
+  // Where layer i's data at `key` comes from: its own tile, or below its
+  // finest level its finest tile there; nullopt where it has none.
+  std::optional<geo::TileKey> source_of(size_t i, const geo::TileKey& key) const {
+    const int m = std::max(0, key.level - layers[i].store.manifest().max_level);
+    const geo::TileKey a{key.level - m, key.x >> m, key.y >> m};
+    if (!layers[i].store.has_tile(a)) return std::nullopt;
+    return a;
+  }
+
   // Layer i's tile at `key`: its own, or below its finest level its finest
   // tile there upsampled (pipeline/fuse_tiles.h); null where it has no data.
-  Result<RasterPtr> layer_tile(size_t i, const geo::TileKey& key) const {
-    const tiles::Store& store = layers[i].store;
-    const int finest = store.manifest().max_level;
-    if (key.level <= finest) {
-      if (!store.has_tile(key)) return RasterPtr{};
-      return std::make_shared<const tiles::Raster>(RELIEF_TRY(store.read_tile(key)).raster);
-    }
-    const int m = key.level - finest;
-    const geo::TileKey a{finest, key.x >> m, key.y >> m};
-    if (!store.has_tile(a)) return RasterPtr{};
-    const tiles::Tile t = RELIEF_TRY(store.read_tile(a));
-    return std::make_shared<const tiles::Raster>(upsample(t.raster, a, key, grid));
+  Result<RasterPtr> layer_tile(size_t i, const geo::TileKey& key, OpenCache* cache) const {
+    const auto a = source_of(i, key);
+    if (!a) return RasterPtr{};
+    const RasterPtr t = RELIEF_TRY(read(i, *a, cache));
+    if (a->level == key.level) return t;
+    return std::make_shared<const tiles::Raster>(upsample(*t, *a, key, grid));
   }
 
   // Whether some layer has data at `key` (its own tile, or its finest above).
   bool has_data(const geo::TileKey& key) const {
-    for (const ElevationLayer& l : layers) {
-      const int m = std::max(0, key.level - l.store.manifest().max_level);
-      if (l.store.has_tile({key.level - m, key.x >> m, key.y >> m})) return true;
+    for (size_t i = 0; i < layers.size(); ++i) {
+      if (source_of(i, key)) return true;
     }
     return false;
   }
 
+  // The bytes of the layers' tiles that make the fused tile at `key`: what
+  // the fused store's index says a tile costs to fetch (it is encoded only
+  // when fetched).
+  uint64_t source_bytes(const geo::TileKey& key) const {
+    uint64_t bytes = 0;
+    for (size_t i = 0; i < layers.size(); ++i) {
+      if (const auto a = source_of(i, key)) {
+        bytes += layers[i].store.index(a->level).find(*a)->file_bytes;
+      }
+    }
+    return bytes;
+  }
+
   // The fused bordered tile, nodata as NaN; null where no layer has it.
-  Result<RasterPtr> fused(const geo::TileKey& key) const {
+  Result<RasterPtr> fused(const geo::TileKey& key, OpenCache* cache = nullptr) const {
     std::vector<RasterPtr> held;
     std::vector<const tiles::Raster*> rasters;
     std::vector<double> w;
     for (size_t i : order) {
-      RasterPtr r = RELIEF_TRY(layer_tile(i, key));
+      RasterPtr r = RELIEF_TRY(layer_tile(i, key, cache));
       if (!r) continue;
       rasters.push_back(r.get());
       w.push_back(weights[i]);
@@ -227,11 +291,52 @@ Status sparse_geometric_errors(std::vector<tiles::LevelIndex>& indices,
   return {};
 }
 
+// The index entries of fused tiles from their samples, noted as the error
+// pass reads them (a tile no finest tile reaches is read when asked for).
+class FusedBounds {
+ public:
+  Result<RasterPtr> seen(const geo::TileKey& key, Result<RasterPtr> tile, const Layers& layers) {
+    if (!tile || !*tile) return tile;
+    {
+      std::lock_guard lock(mutex_);
+      if (entries_.contains(key)) return tile;
+    }
+    const int b = layers.grid.border();
+    tiles::TileHeader header;
+    header.stats = (*tile)->stats(b, b, layers.grid.width(), layers.grid.height());
+    const tiles::IndexEntry e = tiles::index_entry_for(key, header, layers.source_bytes(key));
+    std::lock_guard lock(mutex_);
+    entries_.emplace(key, e);
+    return tile;
+  }
+
+  Result<tiles::IndexEntry> entry(const geo::TileKey& key, const tiles::BorderedTileReader& read,
+                                  const Layers& layers) {
+    if (!find(key)) {
+      const RasterPtr tile = RELIEF_TRY(read(key));
+      if (!tile)
+        return fail(fmt::format("{}: tile {} is in none of the layers", layers.layers[0].name,
+                                key.to_string()));
+    }
+    return *find(key);
+  }
+
+ private:
+  const tiles::IndexEntry* find(const geo::TileKey& key) {
+    std::lock_guard lock(mutex_);
+    const auto it = entries_.find(key);
+    return it == entries_.end() ? nullptr : &it->second;
+  }
+  std::mutex mutex_;
+  std::unordered_map<geo::TileKey, tiles::IndexEntry, geo::TileKeyHash> entries_;
+};
+
 }  // namespace
 
 Result<tiles::Store> fuse_elevation_layers(std::vector<ElevationLayer> layers, FuseMode mode,
-                                           Executor& executor) {
+                                           Executor& executor, std::vector<double> weights) {
   if (layers.empty()) return fail("elevation layers: none given");
+  weights = RELIEF_TRY(fuse_weights(std::move(weights), layers.size(), "elevation layers"));
   for (const ElevationLayer& l : layers) RELIEF_CHECK(check_layer(layers[0].store.manifest(), l));
   tiles::Manifest manifest = layers[0].store.manifest();
   std::string name = layers[0].name;
@@ -253,7 +358,7 @@ Result<tiles::Store> fuse_elevation_layers(std::vector<ElevationLayer> layers, F
   auto shared = std::make_shared<Layers>();
   shared->grid = layers[0].store.grid();
   shared->mode = mode;
-  shared->weights.assign(layers.size(), 1.0);
+  shared->weights = std::move(weights);
   for (size_t i = 0; i < layers.size(); ++i) shared->order.push_back(i);
   std::stable_sort(shared->order.begin(), shared->order.end(), [&layers](size_t a, size_t b) {
     return layers[a].store.manifest().max_level > layers[b].store.manifest().max_level;
@@ -263,36 +368,41 @@ Result<tiles::Store> fuse_elevation_layers(std::vector<ElevationLayer> layers, F
 
   // Per level: the union of the layers' tiles (plus, for layers of different
   // depths, the padding that keeps neighbouring data levels one apart).
-  std::vector<std::vector<geo::TileKey>> keys = tile_keys(*shared, manifest);
+  const std::vector<std::vector<geo::TileKey>> keys = tile_keys(*shared, manifest);
   std::vector<tiles::LevelIndex> indices;
+  std::unordered_set<geo::TileKey, geo::TileKeyHash> parents;
   for (int level = manifest.min_level; level <= manifest.max_level; ++level) {
-    const std::vector<geo::TileKey>& level_keys = keys[static_cast<size_t>(level)];
-    std::vector<tiles::IndexEntry> entries(level_keys.size());
-    FirstError error;
-    executor.parallel_for(level_keys.size(), [&](size_t k) {
-      auto bytes = shared->encoded(level_keys[k]);
-      if (!bytes) return error.set(bytes.error());
-      auto header = tiles::parse_tile_header(*bytes, name);
-      if (!header) return error.set(header.error());
-      entries[k] = tiles::index_entry_for(level_keys[k], *header, bytes->size());
-    });
-    RELIEF_CHECK(error.status());
     tiles::LevelIndex index(level);
-    for (const tiles::IndexEntry& e : entries) index.add(e);
+    for (const geo::TileKey& key : keys[static_cast<size_t>(level)]) {
+      index.add({key});
+      if (key.level > manifest.min_level) parents.insert(*key.parent());
+    }
     indices.push_back(std::move(index));
   }
   // Exact geometric errors of the fused pyramid, as `relief build` computes
   // a store's: fusing changes the coarse tiles and the finest data alike, so
-  // the layers' own errors do not bound the fused mesh.
-  const tiles::TileShape shape = *tiles::tile_shape_of(manifest);
-  const tiles::BorderedTileReader read = [&shared](const geo::TileKey& key) {
-    return shared->fused(key);
+  // the layers' own errors do not bound the fused mesh. The one pass over the
+  // fused tiles that needs also gives each tile's bounds; nothing is encoded.
+  OpenCache cache(std::move(parents));
+  FusedBounds bounds;
+  const tiles::BorderedTileReader read = [&shared, &cache, &bounds](const geo::TileKey& key) {
+    return bounds.seen(key, shared->fused(key, &cache), *shared);
   };
+  const tiles::TileShape shape = *tiles::tile_shape_of(manifest);
   if (manifest.sparse_depth) {
     RELIEF_CHECK(sparse_geometric_errors(indices, shape, read, executor));
   } else {
     NullProgress progress;
     RELIEF_CHECK(tiles::compute_geometric_errors(indices, shape, read, executor, progress));
+  }
+  for (tiles::LevelIndex& index : indices) {
+    tiles::LevelIndex complete(index.level());
+    for (const tiles::IndexEntry& e : index.entries()) {
+      tiles::IndexEntry entry = RELIEF_TRY(bounds.entry(e.key, read, *shared));
+      entry.error = e.error;
+      complete.add(entry);
+    }
+    index = std::move(complete);
   }
 
   std::vector<std::vector<std::byte>> serialized(static_cast<size_t>(manifest.max_level) + 1);

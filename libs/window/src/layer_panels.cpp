@@ -66,7 +66,15 @@ bool layer_controls(render::TextureLayer& l) {
   for (size_t k = 0; k < l.lenses.size(); ++k) {
     render::Lens& lens = l.lenses[k];
     ImGui::PushID(static_cast<int>(100 + k));
-    ImGui::TextUnformatted(fmt::format("lens {} at {:.4f}, {:.4f}", k, lens.lon, lens.lat).c_str());
+    ImGui::TextUnformatted(fmt::format("lens {} (drag it on the terrain)", k).c_str());
+    double centre[2] = {lens.lon, lens.lat};
+    if (ImGui::InputScalarN("lon, lat", ImGuiDataType_Double, centre, 2, nullptr, nullptr, "%.5f",
+                            ImGuiInputTextFlags_EnterReturnsTrue) &&
+        std::isfinite(centre[0]) && std::abs(centre[1]) <= 90) {
+      lens.lon = centre[0] - 360 * std::round(centre[0] / 360);
+      lens.lat = centre[1];
+      changed = true;
+    }
     float radius = static_cast<float>(lens.radius_m);
     if (ImGui::SliderFloat("radius m", &radius, 1.0f, 100000.0f, "%.0f",
                            ImGuiSliderFlags_Logarithmic)) {

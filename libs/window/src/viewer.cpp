@@ -91,8 +91,50 @@ void Viewer::Impl::on_input(const view::InputEvent& e) {
     if (e.type == Type::key_down) on_window_key(e.key);
     return;
   }
-  if (e.type == Type::cursor) cursor_x = e.x, cursor_y = e.y;
-  controller->push(e);
+  const bool left = e.button == view::MouseButton::left;
+  if (e.type == Type::mouse_down && left && grab_lens(e)) return;
+  if (e.type == Type::mouse_up && left && lens_drag) {
+    lens_drag->x = e.x, lens_drag->y = e.y;
+    lens_drag->moved = lens_drag->released = true;
+    return;  // the controller never saw the press
+  }
+  if (e.type == Type::cursor) {
+    cursor_x = e.x, cursor_y = e.y;
+    if (lens_drag) lens_drag->x = e.x, lens_drag->y = e.y, lens_drag->moved = true;
+  }
+  controller->push(e);  // cursor moves too: without its press a mode does not drag
+}
+
+bool Viewer::Impl::grab_lens(const view::InputEvent& e) {
+  if ((e.modifiers & view::kControl) || !drawn_camera || !scene) return false;
+  const std::vector<render::TextureLayer>& layers = scene_options.texture_layers;
+  if (std::none_of(layers.begin(), layers.end(),
+                   [](const render::TextureLayer& l) { return !l.lenses.empty(); })) {
+    return false;
+  }
+  const auto at = view::pick(*drawn_camera, e.x, e.y, view::resident_ground(*scene));
+  if (!at) return false;
+  const auto lens = view::lens_at(layers, at->lon, at->lat);
+  if (!lens) return false;
+  lens_drag = LensDrag{*lens, e.x, e.y, false, false};
+  return true;
+}
+
+void Viewer::Impl::move_dragged_lens(const lod::Camera& camera, const view::Ground& ground) {
+  if (!lens_drag || !lens_drag->moved) return;
+  const LensDrag drag = *lens_drag;
+  lens_drag->moved = false;
+  if (drag.released) lens_drag.reset();
+  const auto at = view::pick(camera, drag.x, drag.y, ground);
+  if (!at) return;  // over the sky the lens stays where it was
+  std::vector<render::TextureLayer>& layers = scene_options.texture_layers;
+  render::Lens& lens = layers[drag.lens.layer].lenses[drag.lens.lens];
+  lens.lon = at->lon, lens.lat = at->lat;
+  // As a panel's change: refused, it is taken back and said in the panel.
+  if (auto st = scene->set_texture_layers(layers); !st) {
+    layer_error = st.error().message;
+    layers = scene->options().texture_layers;
+  }
 }
 
 void Viewer::Impl::record(const lod::Camera& camera) {
@@ -212,6 +254,7 @@ Result<bool> Viewer::frame() {
   render::RenderTarget& target = v.window.target();
   camera.width = target.width();
   camera.height_px = target.height();
+  v.move_dragged_lens(camera, ground);
   const double still = v.scene_options.selection.pixel_error;
   const double above = camera.height - ground(camera.lon, camera.lat).value_or(0.0);
   v.threshold = v.speed_lod.threshold(still, dt, v.controller->angular_speed(),

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "relief/view/ground.h"
+#include "relief/view/lens_drag.h"
 #include "relief/window/viewer.h"
 
 namespace relief::window {
@@ -99,12 +100,26 @@ struct Viewer::Impl {
 
   double cursor_x = -1, cursor_y = -1;
   std::optional<view::Pick> pick;
+  // A lens grabbed by a left press inside its circle (Control held: the
+  // press is the camera's): the next frame moves its centre to the terrain
+  // point under the cursor, until the release.
+  struct LensDrag {
+    view::LensRef lens;
+    double x = 0, y = 0;  // the cursor, pixels
+    bool moved = false;   // since the last frame
+    bool released = false;
+  };
+  std::optional<LensDrag> lens_drag;
   LoadProgress progress;
   LoadRate elevation_rate, imagery_rate;
 
   Status make_scene();
   void on_input(const view::InputEvent& e);
   void on_window_key(view::Key key);
+  // A press inside a lens's circle on the last frame's terrain starts a drag.
+  bool grab_lens(const view::InputEvent& e);
+  // The dragged lens to the terrain point under the cursor in `camera`.
+  void move_dragged_lens(const lod::Camera& camera, const view::Ground& ground);
   void record(const lod::Camera& camera);
   bool export_recorded();
   void poll_export();      // a finished export's status into export_status

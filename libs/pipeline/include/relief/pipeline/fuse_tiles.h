@@ -2,8 +2,10 @@
 // Per-tile fusion of several stores' tiles, shared by `relief fuse` (offline,
 // fuse_stores.h) and the draw-time fusion of elevation layers
 // (fused_elevation.h), so both give the same samples.
+#include <string>
 #include <vector>
 
+#include "relief/base/result.h"
 #include "relief/geo/tile_grid.h"
 #include "relief/geo/tile_key.h"
 #include "relief/tiles/raster.h"
@@ -14,6 +16,14 @@ enum class FuseMode {
   Blend,  // weighted mean of the valid inputs
   First,  // the first valid input in the order given (void filling)
 };
+
+// The weights of `inputs` fused inputs as `relief fuse --weights` and the
+// draw-time fusion take them: one per input (an error names `inputs_name`
+// when the count differs), each > 0 and finite; empty means all 1. Scaled so
+// the largest is 1: only the ratios matter, and weighted sums of float
+// samples then cannot overflow (1e308 + 1e308 would be inf, and inf / inf NaN).
+Result<std::vector<double>> fuse_weights(std::vector<double> weights, size_t inputs,
+                                         const std::string& inputs_name);
 
 // Float samples of `out` (the size of every non-null input): the weighted
 // mean (or the first valid, in input order) of the inputs' valid samples;

@@ -31,10 +31,13 @@ struct ElevationLayer {
 // border (the first is the reference; an error names the layer that
 // differs). First: the first layer with a valid sample wins, the deeper
 // layers first, then in the order given; Blend: the mean of the valid
-// samples. Below a layer's finest level its finest tiles are upsampled
-// (bilinear). Layers of different depths make a store of sparse depth
-// (Manifest::sparse_depth): where a tile has no child, quads below it draw it.
+// samples, weighted by `weights` (one per layer in the order given, each > 0;
+// empty: all 1) exactly as `relief fuse --weights` weighs its inputs
+// (fuse_weights()). Below a layer's finest level its finest tiles are
+// upsampled (bilinear). Layers of different depths make a store of sparse
+// depth (Manifest::sparse_depth): where a tile has no child, quads below it
+// draw it.
 Result<tiles::Store> fuse_elevation_layers(std::vector<ElevationLayer> layers, FuseMode mode,
-                                           Executor& executor);
+                                           Executor& executor, std::vector<double> weights = {});
 
 }  // namespace relief::pipeline

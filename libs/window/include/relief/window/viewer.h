@@ -10,6 +10,8 @@
 //   Tab, F1  panels on/off        F8   vsync on/off
 //   F9       recording on/off     F11  fullscreen
 //   F10      export recorded path F12  screenshot (PNG)     Escape  quit
+// and a left press inside a texture layer's lens (without Control), which
+// drags the lens over the terrain until the release (docs/viewer.md).
 #include <functional>
 #include <memory>
 #include <optional>

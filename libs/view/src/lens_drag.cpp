@@ -1,0 +1,36 @@
+#include "relief/view/lens_drag.h"
+
+#include <cmath>
+#include <numbers>
+
+namespace relief::view {
+
+namespace {
+// As the lens pass (gpuprocess/composite.cpp): a sphere of the equatorial radius.
+constexpr double kMetresPerDegree = 6378137.0 * std::numbers::pi / 180;
+}  // namespace
+
+double lens_distance_m(double lon0, double lat0, double lon, double lat) {
+  double dlon = lon - lon0;
+  dlon -= 360 * std::round(dlon / 360);  // across the antimeridian
+  const double x = dlon * kMetresPerDegree * std::cos(lat0 * std::numbers::pi / 180);
+  const double y = (lat - lat0) * kMetresPerDegree;
+  return std::hypot(x, y);
+}
+
+std::optional<LensRef> lens_at(const std::vector<render::TextureLayer>& layers, double lon,
+                               double lat) {
+  std::optional<LensRef> best;
+  double best_ratio = 1;
+  for (size_t i = layers.size(); i-- > 0;) {  // the upper layers first
+    for (size_t k = 0; k < layers[i].lenses.size(); ++k) {
+      const render::Lens& lens = layers[i].lenses[k];
+      if (!(lens.radius_m > 0)) continue;
+      const double ratio = lens_distance_m(lens.lon, lens.lat, lon, lat) / lens.radius_m;
+      if (ratio <= 1 && (!best || ratio < best_ratio)) best = LensRef{i, k}, best_ratio = ratio;
+    }
+  }
+  return best;
+}
+
+}  // namespace relief::view
