@@ -180,9 +180,12 @@ void viridis_cpu(float t, float out[3]) {
   }
 }
 
-// A unorm8 channel as GL stores it: round(clamp(v) * 255).
+// A unorm8 channel as GL stores it: round(clamp(v) * 255), to nearest even
+// (adding and taking away 1.5 * 2^23 rounds a float below 2^22 to an
+// integer: no call to lrintf per channel).
 uint8_t unorm8(float v) {
-  return static_cast<uint8_t>(std::lrint(std::clamp(v, 0.0f, 1.0f) * 255.0f));
+  constexpr float kRound = 12582912.0f;
+  return static_cast<uint8_t>((std::clamp(v, 0.0f, 1.0f) * 255.0f + kRound) - kRound);
 }
 
 }  // namespace
@@ -194,6 +197,7 @@ tiles::Raster map_colours_cpu(const tiles::Raster& values, float range_min, floa
   const auto src = values.f32();
   const auto dst = out.u8();
   const float span = range_max - range_min;
+  const uint8_t alpha = unorm8(opacity);
   for (size_t i = 0; i < src.size(); ++i) {
     const float v = src[i];
     uint8_t* p = &dst[4 * i];
@@ -202,10 +206,14 @@ tiles::Raster map_colours_cpu(const tiles::Raster& values, float range_min, floa
       continue;
     }
     const float t = std::clamp((v - range_min) / span, 0.0f, 1.0f);
-    float rgb[3] = {t, t, t};
-    if (map == ColorMap::viridis) viridis_cpu(t, rgb);
-    for (int k = 0; k < 3; ++k) p[k] = unorm8(rgb[k] * opacity);
-    p[3] = unorm8(opacity);
+    if (map == ColorMap::viridis) {
+      float rgb[3];
+      viridis_cpu(t, rgb);
+      for (int k = 0; k < 3; ++k) p[k] = unorm8(rgb[k] * opacity);
+    } else {
+      p[0] = p[1] = p[2] = unorm8(t * opacity);
+    }
+    p[3] = alpha;
   }
   return out;
 }
