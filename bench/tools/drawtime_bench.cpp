@@ -10,19 +10,21 @@
 // Per chain: wall time from the change to the end of that frame (steady
 // clock), frames needed, layer tiles processed, the renderer's GPU processing
 // seconds (chain, colour map and composite, to glFinish) and processed samples
-// per second; then the CPU path (gpuprocess::run_chain_cpu, a ThreadExecutor
-// on every core) on the tiles the complete frame drew, processing only (tiles
+// per second, the frames' wait for the renderer's CPU workers, and the
+// process's CPU time over the change (all threads); then the CPU path (gpuprocess::run_chain_cpu, a
+// ThreadExecutor on every core) on the tiles the complete frame drew, processing only (tiles
 // already decoded in memory, no colour map, no upload). Medians of RUNS runs.
 // With a fourth argument, the rows are also appended to that file as a
 // markdown table. Every chain runs on the GPU path; the target's chain runs
 // again processed on the CPU (render::ProcessOn::cpu, the automatic choice
 // on llvmpipe). CHAINS=NAME,... in the environment: only the chains whose
-// names start so.
+// names start so; BUDGET_MS=MS: the frames' processing budget (default 100).
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <ctime>
 #include <set>
 #include <string>
 #include <thread>
@@ -131,6 +133,9 @@ Result<render::TextureLayer> make_layer(const tiles::Store& store,
 
 struct Row {
   double wall_ms = 0, frames = 0, tiles = 0, gpu_ms = 0, gpu_msps = 0, redraw_ms = 0;
+  // The process's CPU time over the change (every thread: llvmpipe's, the
+  // renderer's workers, this one), and the frames' wait for the workers.
+  double process_cpu_ms = 0, wait_ms = 0;
   double cpu_ms = 0, cpu_msps = 0;
   size_t cpu_tiles = 0;
 };
@@ -140,15 +145,25 @@ double ms_since(Steady::time_point t0) {
   return std::chrono::duration<double, std::milli>(Steady::now() - t0).count();
 }
 
+// CPU time of the whole process, every thread, in ms: on a loaded machine a
+// steadier figure than the wall clock.
+double process_cpu_ms() {
+  timespec t{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) * 1e3 + static_cast<double>(t.tv_nsec) / 1e6;
+}
+
 // Frames until one is complete; a frame that processed nothing and is not
 // complete waits for tiles, so the loop pauses briefly then. Returns the
 // frames drawn, adding their processing to `tiles` and `seconds`.
 Result<int> draw_until_complete(view::Scene& scene, const lod::Camera& camera,
-                                render::RenderTarget& target, uint64_t& tiles, double& seconds) {
+                                render::RenderTarget& target, uint64_t& tiles, double& seconds,
+                                double& waited) {
   for (int frame = 1; frame <= 5000; ++frame) {
     const view::FrameReport f = RELIEF_TRY(scene.draw(camera, target));
     tiles += f.draw.layer_tiles_processed;
     seconds += f.draw.processing_seconds;
+    waited += f.draw.processing_wait_seconds;
     if (f.complete) return frame;
     if (f.draw.layer_tiles_processed == 0)
       std::this_thread::sleep_for(std::chrono::milliseconds(2));
@@ -175,13 +190,19 @@ Result<Row> measure(const tiles::Store& store, const Case& c, const lod::Camera&
   const render::TextureLayer b = RELIEF_TRY(make_layer(store, c.b, c.range_scale, c.where));
   view::SceneOptions o;
   o.interactive = true;
+  // BUDGET_MS: the frames' processing budget (RenderOptions), e.g. to see
+  // the CPU path finish in one frame on a loaded machine, where the
+  // workers' estimate exceeds the default 100 ms.
+  if (const char* budget = std::getenv("BUDGET_MS")) {
+    o.render.processing_per_frame = std::atof(budget) / 1e3;
+  }
   o.texture_layers = {a};
   o.selection.texture = &store;
   auto scene = RELIEF_TRY(view::Scene::create(nullptr, nullptr, o, steady_clock()));
   // Warm-up: every tile loaded and processed, the operators' programs compiled.
   uint64_t tiles = 0;
-  double seconds = 0;
-  RELIEF_TRY(draw_until_complete(*scene, camera, target, tiles, seconds));
+  double seconds = 0, waited = 0;
+  RELIEF_TRY(draw_until_complete(*scene, camera, target, tiles, seconds, waited));
   Row row;
   {
     const view::FrameReport again = RELIEF_TRY(scene->draw(camera, target));
@@ -192,13 +213,16 @@ Result<Row> measure(const tiles::Store& store, const Case& c, const lod::Camera&
   }
   const double interior =
       static_cast<double>(store.grid().width()) * static_cast<double>(store.grid().height());
-  std::vector<double> wall, frames, processed, gpu, rate;
+  std::vector<double> wall, frames, processed, gpu, rate, cpu_time, wait;
   for (int r = 0; r < runs; ++r) {
-    tiles = 0, seconds = 0;
+    tiles = 0, seconds = 0, waited = 0;
     const auto t0 = Steady::now();
+    const double c0 = process_cpu_ms();
     RELIEF_CHECK(scene->set_texture_layers({r % 2 == 0 ? b : a}));
-    const int n = RELIEF_TRY(draw_until_complete(*scene, camera, target, tiles, seconds));
+    const int n = RELIEF_TRY(draw_until_complete(*scene, camera, target, tiles, seconds, waited));
     wall.push_back(ms_since(t0));
+    cpu_time.push_back(process_cpu_ms() - c0);
+    wait.push_back(waited * 1e3);
     frames.push_back(n);
     processed.push_back(static_cast<double>(tiles));
     gpu.push_back(seconds * 1e3);
@@ -206,6 +230,7 @@ Result<Row> measure(const tiles::Store& store, const Case& c, const lod::Camera&
   }
   row.wall_ms = median(wall), row.frames = median(frames), row.tiles = median(processed);
   row.gpu_ms = median(gpu), row.gpu_msps = median(rate);
+  row.process_cpu_ms = median(cpu_time), row.wait_ms = median(wait);
 
   // The CPU path on the tiles the complete frame drew, decoded beforehand.
   const std::vector<geo::TileKey> keys = drawn_tiles(*scene, store);
@@ -293,9 +318,9 @@ int main(int argc, char** argv) {
       "medians; CPU: %u threads\n",
       (*context)->renderer().c_str(), size->first, size->second, camera.lon, camera.lat, kRange,
       runs, ThreadExecutor().concurrency());
-  std::printf("%-42s %-22s %9s %6s %6s %9s %9s %9s %9s %9s %7s\n", "chain", "change", "wall ms",
-              "frames", "tiles", "gpu ms", "gpu Ms/s", "cpu ms", "cpu Ms/s", "redraw ms",
-              "gpu/cpu");
+  std::printf("%-42s %-22s %9s %6s %6s %9s %9s %9s %9s %9s %7s %9s %9s\n", "chain", "change",
+              "wall ms", "frames", "tiles", "gpu ms", "gpu Ms/s", "cpu ms", "cpu Ms/s", "redraw ms",
+              "gpu/cpu", "wait ms", "proc cpu");
   bool failed = false;
   // CHAINS=NAME,NAME: only the chains whose names start with one of them.
   const char* only = std::getenv("CHAINS");
@@ -318,9 +343,10 @@ int main(int argc, char** argv) {
       continue;
     }
     const Row& r = *row;
-    std::printf("%-42s %-22s %9.1f %6.0f %6.0f %9.1f %9.2f %9.1f %9.2f %9.1f %6.2fx\n",
+    std::printf("%-42s %-22s %9.1f %6.0f %6.0f %9.1f %9.2f %9.1f %9.2f %9.1f %6.2fx %9.1f %9.1f\n",
                 c.name.c_str(), c.change.c_str(), r.wall_ms, r.frames, r.tiles, r.gpu_ms,
-                r.gpu_msps, r.cpu_ms, r.cpu_msps, r.redraw_ms, r.gpu_msps / r.cpu_msps);
+                r.gpu_msps, r.cpu_ms, r.cpu_msps, r.redraw_ms, r.gpu_msps / r.cpu_msps, r.wait_ms,
+                r.process_cpu_ms);
     if (r.tiles != static_cast<double>(r.cpu_tiles)) {
       std::printf("  note: the change processed %.0f layer tiles, the complete frame draws %zu\n",
                   r.tiles, r.cpu_tiles);
@@ -328,9 +354,10 @@ int main(int argc, char** argv) {
     if (markdown) {
       std::fprintf(markdown,
                    "| %s | %s | %.1f ms | %.0f | %.0f | %.1f ms, %.1f Ms/s | %.1f ms, %.1f Ms/s | "
-                   "%.2f× | %.1f ms |\n",
+                   "%.2f× | %.1f ms | %.1f ms | %.1f ms |\n",
                    c.name.c_str(), c.change.c_str(), r.wall_ms, r.frames, r.tiles, r.gpu_ms,
-                   r.gpu_msps, r.cpu_ms, r.cpu_msps, r.gpu_msps / r.cpu_msps, r.redraw_ms);
+                   r.gpu_msps, r.cpu_ms, r.cpu_msps, r.gpu_msps / r.cpu_msps, r.redraw_ms,
+                   r.wait_ms, r.process_cpu_ms);
     }
   }
   if (markdown && std::fclose(markdown) != 0) {

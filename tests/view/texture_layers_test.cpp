@@ -123,9 +123,10 @@ int largest_difference(const std::vector<uint8_t>& a, const std::vector<uint8_t>
   return largest;
 }
 
-// --process-on cpu: the chain runs on worker threads, so the frames after a
-// change wait for none; they show no tile of the old parameters (a quad shows
-// its new composite, an ancestor's, or none), and the complete frame equals
+// --process-on cpu: the chain runs on worker threads, which a frame waits
+// for only within its processing budget (without one here: the first frame
+// waits for them); frames after a change show no tile of the old parameters
+// (a quad shows its new composite, an ancestor's, or none), and the complete frame equals
 // the GPU's still within a grey level (the linear mapping's division: double
 // on the CPU, float on the GPU). The change also turns the grey map into
 // viridis, so an old, grey pixel cannot pass for a new one.
@@ -168,6 +169,35 @@ TEST_F(TextureLayersTest, OnTheCpuAParameterChangeLeavesNoStaleTileAndEqualsTheG
   ASSERT_TRUE(s->set_texture_layers({layer(changed, 1, ColorMap::viridis, cpu)}));
   ASSERT_TRUE(until_complete(before, ground));
   EXPECT_LE(largest_difference(*target_->read_rgba(), gpu_after), 1);
+}
+
+// --process-on cpu, a change whose processing fits the frame's budget (here
+// none: frames stepped deterministically): the next frame waits for the
+// workers (processing is not I/O) and is complete, every tile of the new
+// parameters, their colours mapped on the CPU (within a grey level of the
+// GPU's still). Before, it only submitted the jobs and showed ancestors.
+TEST_F(TextureLayersTest, OnTheCpuAChangeThatFitsTheBudgetIsCompleteInTheNextFrame) {
+  const auto cpu = render::ProcessOn::cpu;
+  auto s = scene(
+      {layer(chain_of("lee", {"radius=3"}, {"sigmas=3"}), 1, gpuprocess::ColorMap::grey, cpu)},
+      true);
+  ASSERT_TRUE(s);
+  bool complete = false;
+  for (int frame = 0; frame < 200 && !complete; ++frame) {
+    auto f = s->draw(kDown, *target_);
+    ASSERT_TRUE(f) << f.error().message;
+    complete = f->complete;
+    if (!complete) std::this_thread::sleep_for(5ms);  // tiles load
+  }
+  ASSERT_TRUE(complete);
+  const auto changed = chain_of("lee", {"radius=3"}, {"sigmas=1.5"});
+  ASSERT_TRUE(s->set_texture_layers({layer(changed, 1, gpuprocess::ColorMap::grey, cpu)}));
+  auto next = s->draw(kDown, *target_);
+  ASSERT_TRUE(next) << next.error().message;
+  EXPECT_TRUE(next->complete);
+  EXPECT_GT(next->draw.layer_tiles_processed, 0u);
+  EXPECT_EQ(next->draw.texture_misses, 0u);
+  EXPECT_LE(largest_difference(*target_->read_rgba(), still({layer(changed)})), 1);
 }
 
 TEST_F(TextureLayersTest, LayersCompositeByOpacity) {

@@ -1,5 +1,6 @@
 #include "relief/gpuprocess/chain.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include <fmt/format.h>
@@ -92,26 +93,39 @@ Result<tiles::Raster> run_chain_cpu(const OperatorChain& chain, const tiles::Ras
   assert(tile.type() == tiles::SampleType::Float32 && tile.bands() == 1);
   RELIEF_CHECK(check_fits(chain, border));
   RELIEF_CHECK(check_stats(chain, stats));
-  int w = tile.width(), h = tile.height();
-  std::vector<float> current(tile.f32().begin(), tile.f32().end()), next;
-  for (const auto& s : chain.steps) {
+  // Only what the output needs: the border beyond the chain's margin and the
+  // one sample kept is cropped before the first step, not after the last
+  // (each output sample depends only on the input around it, so the values
+  // are the same). The tile is read in place; the last step writes the
+  // result.
+  const int crop = border - 1 - chain_margin(chain);
+  const int stride = tile.width();
+  int w = tile.width() - 2 * crop, h = tile.height() - 2 * crop;
+  tiles::Raster out(tiles::SampleType::Float32, 1, w - 2 * chain_margin(chain),
+                    h - 2 * chain_margin(chain));
+  process::ConstView in{
+      tile.f32().data() + static_cast<size_t>(crop) * stride + crop, w, h, stride, crop, crop};
+  if (chain.steps.empty()) {
+    for (int y = 0; y < out.height(); ++y) {
+      std::copy_n(in.row(y), out.width(), &out.f32()[static_cast<size_t>(y) * out.width()]);
+    }
+    return out;
+  }
+  std::vector<float> buffers[2];
+  for (size_t i = 0; i < chain.steps.size(); ++i) {
+    const auto& s = chain.steps[i];
     const int m = process::margin_of(*s.op, s.params);
     const int ow = w - 2 * m, oh = h - 2 * m;
-    next.assign(static_cast<size_t>(ow) * static_cast<size_t>(oh), 0.0f);
-    RELIEF_CHECK(process::run_operator(*s.op, s.params, {current.data(), w, h, w, 0, 0},
-                                       {next.data(), ow, oh, ow, m, m}, executor, stats));
-    current.swap(next);
-    w = ow, h = oh;
-  }
-  // What is left of the border beyond the one sample the output keeps.
-  const int crop = border - 1 - chain_margin(chain);
-  tiles::Raster out(tiles::SampleType::Float32, 1, w - 2 * crop, h - 2 * crop);
-  auto dst = out.f32();
-  for (int y = 0; y < out.height(); ++y) {
-    for (int x = 0; x < out.width(); ++x) {
-      dst[static_cast<size_t>(y) * out.width() + x] =
-          current[static_cast<size_t>(y + crop) * w + x + crop];
+    float* dst = out.f32().data();
+    if (i + 1 < chain.steps.size()) {
+      std::vector<float>& next = buffers[i % 2];
+      next.resize(static_cast<size_t>(ow) * static_cast<size_t>(oh));
+      dst = next.data();
     }
+    const process::MutView o{dst, ow, oh, ow, in.origin_x + m, in.origin_y + m};
+    RELIEF_CHECK(process::run_operator(*s.op, s.params, in, o, executor, stats));
+    in = o;
+    w = ow, h = oh;
   }
   return out;
 }

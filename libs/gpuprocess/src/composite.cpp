@@ -1,6 +1,7 @@
 #include "relief/gpuprocess/composite.h"
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <map>
 
@@ -157,6 +158,64 @@ Result<ColorMap> parse_colormap(const std::string& name) {
 
 const char* to_string(ColorMap map) {
   return map == ColorMap::viridis ? "viridis" : "grey";
+}
+
+namespace {
+
+// viridis() of kLayerPass in float, evaluated as written (no fused
+// multiply-adds: the build targets no FMA).
+void viridis_cpu(float t, float out[3]) {
+  static constexpr float c[7][3] = {
+      {0.2777273272234177f, 0.005407344544966578f, 0.3340998053353061f},
+      {0.1050930431085774f, 1.404613529898575f, 1.384590162594685f},
+      {-0.3308618287255563f, 0.214847559468213f, 0.09509516302823659f},
+      {-4.634230498983486f, -5.799100973351585f, -19.33244095627987f},
+      {6.228269936347081f, 14.17993336680509f, 56.69055260068105f},
+      {4.776384997670288f, -13.74514537774601f, -65.35303263337234f},
+      {-5.435455855934631f, 4.645852612178535f, 26.3124352495832f}};
+  for (int k = 0; k < 3; ++k) {
+    float v = c[6][k];
+    for (int i = 5; i >= 0; --i) v = c[i][k] + t * v;
+    out[k] = std::clamp(v, 0.0f, 1.0f);
+  }
+}
+
+// A unorm8 channel as GL stores it: round(clamp(v) * 255), to nearest even
+// (adding and taking away 1.5 * 2^23 rounds a float below 2^22 to an
+// integer: no call to lrintf per channel).
+uint8_t unorm8(float v) {
+  constexpr float kRound = 12582912.0f;
+  return static_cast<uint8_t>((std::clamp(v, 0.0f, 1.0f) * 255.0f + kRound) - kRound);
+}
+
+}  // namespace
+
+tiles::Raster map_colours_cpu(const tiles::Raster& values, float range_min, float range_max,
+                              ColorMap map, float opacity) {
+  assert(values.type() == tiles::SampleType::Float32 && values.bands() == 1);
+  tiles::Raster out(tiles::SampleType::UInt8, 4, values.width(), values.height());
+  const auto src = values.f32();
+  const auto dst = out.u8();
+  const float span = range_max - range_min;
+  const uint8_t alpha = unorm8(opacity);
+  for (size_t i = 0; i < src.size(); ++i) {
+    const float v = src[i];
+    uint8_t* p = &dst[4 * i];
+    if (std::isnan(v)) {
+      p[0] = p[1] = p[2] = p[3] = 0;
+      continue;
+    }
+    const float t = std::clamp((v - range_min) / span, 0.0f, 1.0f);
+    if (map == ColorMap::viridis) {
+      float rgb[3];
+      viridis_cpu(t, rgb);
+      for (int k = 0; k < 3; ++k) p[k] = unorm8(rgb[k] * opacity);
+    } else {
+      p[0] = p[1] = p[2] = unorm8(t * opacity);
+    }
+    p[3] = alpha;
+  }
+  return out;
 }
 
 struct Compositor::Impl {

@@ -268,7 +268,11 @@ Status run_operator(const OperatorSpec& op, const Params& params, ConstView inpu
     }
     return {};
   }
-  if (m > 0) context.integral_input = small_integers ? *small_integers : all_small_integers(input);
+  // Mean, Lee and Kuan sum exactly whatever the values (window_stats.h).
+  const bool exact_sums = op.name == "mean" || op.name == "lee" || op.name == "kuan";
+  if (m > 0 && !exact_sums) {
+    context.integral_input = small_integers ? *small_integers : all_small_integers(input);
+  }
   constexpr int kRowsPerTask = 32;
   const int tasks = (output.height + kRowsPerTask - 1) / kRowsPerTask;
   executor.parallel_for(static_cast<size_t>(tasks), [&](size_t t) {

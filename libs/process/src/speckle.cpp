@@ -15,18 +15,23 @@ constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 constexpr double kEpsilon = 1e-10;  // as OTB: "zero" mean or variance
 
 // Streams window sums over output rows [y0, y1).
-WindowSums sums_for_rows(ConstView in, MutView out, int r, int y0, int y1, bool integral) {
-  return WindowSums(in.window(0, y0, out.width + 2 * r, y1 - y0 + 2 * r), r, integral);
+WindowSums sums_for_rows(ConstView in, MutView out, int r, int y0, int y1, bool integral,
+                         WindowSums::Mode mode = WindowSums::Mode::double_) {
+  return WindowSums(in.window(0, y0, out.width + 2 * r, y1 - y0 + 2 * r), r, integral, mode);
 }
 
 // Shared skeleton of the local-statistics filters: f(centre, mean, variance, n).
+// Mean, Lee and Kuan take the exact window sums (window_stats.h); Gamma-MAP
+// keeps the double sums its GPU shader reproduces bit for bit (its weight
+// amplifies their rounding near the threshold).
 template <class F>
-void local_stats_filter(ConstView in, MutView out, const SpeckleParams& p, int y0, int y1, F f) {
+void local_stats_filter(ConstView in, MutView out, const SpeckleParams& p, int y0, int y1,
+                        WindowSums::Mode mode, F f) {
   const int r = p.radius;
-  WindowSums sums = sums_for_rows(in, out, r, y0, y1, p.integral_input);
+  WindowSums sums = sums_for_rows(in, out, r, y0, y1, p.integral_input, mode);
   for (int y = y0; y < y1; ++y) {
     sums.next_row(y - y0);
-    const double *s = sums.sum(), *q = sums.sum_sq(), *c = sums.count();
+    const double *s = sums.sum(), *d = sums.dev_sq(), *c = sums.count();
     const float* src = in.row(y + r) + r;
     float* dst = out.row(y);
     for (int x = 0; x < out.width; ++x) {
@@ -37,7 +42,7 @@ void local_stats_filter(ConstView in, MutView out, const SpeckleParams& p, int y
       }
       const double n = c[x];
       const double mean = s[x] / n;
-      const double var = n > 1 ? (q[x] - s[x] * mean) / (n - 1) : 0.0;
+      const double var = n > 1 ? d[x] / (n - 1) : 0.0;
       dst[x] = static_cast<float>(f(static_cast<double>(centre), mean, std::max(0.0, var), n));
     }
   }
@@ -46,21 +51,23 @@ void local_stats_filter(ConstView in, MutView out, const SpeckleParams& p, int y
 }  // namespace
 
 void mean_filter(ConstView in, MutView out, const SpeckleParams& p, int y0, int y1) {
-  local_stats_filter(in, out, p, y0, y1, [](double, double m, double, double) { return m; });
+  local_stats_filter(in, out, p, y0, y1, WindowSums::Mode::exact,
+                     [](double, double m, double, double) { return m; });
 }
 
 // Lee and Kuan share everything but the weight of the centre sample.
 template <class Weight>
 void mmse_filter(ConstView in, MutView out, const SpeckleParams& p, int y0, int y1, Weight weight) {
   const double cu2 = 1.0 / p.looks;
-  local_stats_filter(in, out, p, y0, y1, [=](double i, double m, double var, double) {
-    if (std::abs(m) < kEpsilon) return 0.0;
-    if (std::abs(var) < kEpsilon) return m;
-    const double ci2 = var / (m * m);
-    if (ci2 < cu2) return m;
-    const double w = weight(ci2, cu2);
-    return i * w + m * (1.0 - w);
-  });
+  local_stats_filter(in, out, p, y0, y1, WindowSums::Mode::exact,
+                     [=](double i, double m, double var, double) {
+                       if (std::abs(m) < kEpsilon) return 0.0;
+                       if (std::abs(var) < kEpsilon) return m;
+                       const double ci2 = var / (m * m);
+                       if (ci2 < cu2) return m;
+                       const double w = weight(ci2, cu2);
+                       return i * w + m * (1.0 - w);
+                     });
 }
 
 void lee_filter(ConstView in, MutView out, const SpeckleParams& p, int y0, int y1) {
@@ -74,19 +81,20 @@ void kuan_filter(ConstView in, MutView out, const SpeckleParams& p, int y0, int 
 
 void gamma_map_filter(ConstView in, MutView out, const SpeckleParams& p, int y0, int y1) {
   const double looks = p.looks, cu2 = 1.0 / looks, cmax = std::sqrt(2.0) * std::sqrt(cu2);
-  local_stats_filter(in, out, p, y0, y1, [=](double i, double m, double var, double) {
-    if (std::abs(m) < kEpsilon) return 0.0;
-    if (std::abs(var) < kEpsilon) return m;
-    const double ci2 = var / (m * m);
-    // At ci2 == cu2 alpha is infinite and the MAP estimate tends to the mean;
-    // OTB evaluates the formula there and returns NaN (see docs/process.md).
-    if (ci2 <= cu2) return m;
-    if (std::sqrt(ci2) >= cmax) return i;  // a point target or an edge: keep it
-    const double alpha = (1.0 + cu2) / (ci2 - cu2);
-    const double b = alpha - looks - 1.0;
-    const double d = m * m * b * b + 4.0 * alpha * looks * m * i;
-    return (b * m + std::sqrt(d)) / (2.0 * alpha);
-  });
+  local_stats_filter(in, out, p, y0, y1, WindowSums::Mode::double_,
+                     [=](double i, double m, double var, double) {
+                       if (std::abs(m) < kEpsilon) return 0.0;
+                       if (std::abs(var) < kEpsilon) return m;
+                       const double ci2 = var / (m * m);
+                       // At ci2 == cu2 alpha is infinite and the MAP estimate tends to the mean;
+                       // OTB evaluates the formula there and returns NaN (see docs/process.md).
+                       if (ci2 <= cu2) return m;
+                       if (std::sqrt(ci2) >= cmax) return i;  // a point target or an edge: keep it
+                       const double alpha = (1.0 + cu2) / (ci2 - cu2);
+                       const double b = alpha - looks - 1.0;
+                       const double d = m * m * b * b + 4.0 * alpha * looks * m * i;
+                       return (b * m + std::sqrt(d)) / (2.0 * alpha);
+                     });
 }
 
 void frost_filter(ConstView in, MutView out, const SpeckleParams& p, int y0, int y1) {
@@ -114,8 +122,7 @@ void frost_filter(ConstView in, MutView out, const SpeckleParams& p, int y0, int
         continue;
       }
       const double n = sums.count()[x], mean = sums.sum()[x] / n;
-      const double var =
-          n > 1 ? std::max(0.0, (sums.sum_sq()[x] - sums.sum()[x] * mean) / (n - 1)) : 0.0;
+      const double var = n > 1 ? std::max(0.0, sums.dev_sq()[x] / (n - 1)) : 0.0;
       if (std::abs(mean) < kEpsilon) {
         out.at(x, y) = 0.0f;
         continue;

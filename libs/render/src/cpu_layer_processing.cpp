@@ -1,6 +1,8 @@
 #include "cpu_layer_processing.h"
 
 #include <algorithm>
+#include <chrono>
+#include <limits>
 
 #include "relief/base/parallel.h"
 
@@ -50,6 +52,31 @@ void CpuLayerProcessing::forget(const Key& key) {
   }
 }
 
+bool CpuLayerProcessing::wait_idle(double seconds) {
+  std::unique_lock lock(mutex_);
+  const auto idle = [&] {
+    return queued_.empty() &&
+           std::ranges::none_of(done_, [](const auto& e) { return running(e.second.result); });
+  };
+  if (!(seconds < std::numeric_limits<double>::infinity())) {
+    finished_cv_.wait(lock, idle);
+    return true;
+  }
+  const auto until = std::chrono::steady_clock::now() +
+                     std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                         std::chrono::duration<double>(std::max(0.0, seconds)));
+  return finished_cv_.wait_until(lock, until, idle);
+}
+
+double CpuLayerProcessing::estimated_seconds() {
+  std::lock_guard lock(mutex_);
+  const auto jobs =
+      queued_.size() + static_cast<size_t>(std::ranges::count_if(
+                           done_, [](const auto& e) { return running(e.second.result); }));
+  const size_t rounds = (jobs + threads_.size() - 1) / threads_.size();
+  return static_cast<double>(rounds) * job_seconds_;
+}
+
 void CpuLayerProcessing::begin_frame() {
   std::lock_guard lock(mutex_);
   std::erase_if(queued_, [&](const auto& e) { return e.second.frame < frame_; });
@@ -80,9 +107,18 @@ void CpuLayerProcessing::work() {
     queued_.erase(next);
     done_[key] = {lod::TilePtr(), 0};  // running
     lock.unlock();
+    const auto start = std::chrono::steady_clock::now();
     Result<tiles::Raster> out =
         gpuprocess::run_chain_cpu(job.chain, *job.tile, job.border, &job.stats, inline_executor);
+    if (out && job.colours) {
+      const Job::Colours& c = *job.colours;
+      *out = gpuprocess::map_colours_cpu(*out, c.range_min, c.range_max, c.map, c.opacity);
+    }
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     lock.lock();
+    job_seconds_ = finished_ == 0 ? seconds : 0.8 * job_seconds_ + 0.2 * seconds;
+    finished_cv_.notify_all();  // wait_idle: checked once the result is in (below)
     if (key.version < latest_version_) {
       done_.erase(key);
       continue;

@@ -3,8 +3,11 @@
 // "Where layers are processed"): a layer tile goes through its chain with the
 // CPU reference (gpuprocess::run_chain_cpu) on worker threads, never on the GL
 // thread of an interactive frame; the renderer picks the result up in a later
-// frame, uploads it and maps and composites it on the GPU. Results are kept
-// under (layer, tile, parameter version) until taken or outdated.
+// frame, uploads it and maps and composites it on the GPU (or, when the layer
+// alone makes the composite, the worker maps it to colours too and the frame
+// only uploads them). Results are kept under (layer, tile, parameter version)
+// until taken or outdated. An interactive frame may wait for the workers
+// (wait_idle) within its processing budget: processing is not I/O.
 //
 // Thread safety: every member is called from the renderer's thread; the
 // workers only touch the queue and the results, under the mutex.
@@ -13,6 +16,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <thread>
 #include <tuple>
 #include <vector>
@@ -20,6 +24,7 @@
 #include "relief/base/result.h"
 #include "relief/geo/tile_key.h"
 #include "relief/gpuprocess/chain.h"
+#include "relief/gpuprocess/composite.h"
 #include "relief/lod/tile_provider.h"
 
 namespace relief::render {
@@ -37,6 +42,14 @@ class CpuLayerProcessing {
     lod::TilePtr tile;                // with its overlap border
     int border = 0;
     process::GlobalStats stats;
+    // Set when the layer alone makes the composite: the result is its
+    // premultiplied RGBA8 colours (gpuprocess::map_colours_cpu), not values.
+    struct Colours {
+      float range_min = 0, range_max = 1;
+      gpuprocess::ColorMap map = gpuprocess::ColorMap::grey;
+      float opacity = 1;
+    };
+    std::optional<Colours> colours;
     double priority = 0;  // higher first
     uint64_t frame = 0;   // the last frame that asked for it (begin_frame)
   };
@@ -56,6 +69,13 @@ class CpuLayerProcessing {
   // Forgets queued jobs and results of versions before `version`.
   void drop_before(uint32_t version);
 
+  // Blocks until no job is queued or running, or `seconds` have passed
+  // (infinity: until idle); returns whether idle.
+  bool wait_idle(double seconds);
+  // Seconds the queued and running jobs should take the workers, from the
+  // jobs finished so far (0 before the first).
+  double estimated_seconds();
+
   // A new frame: jobs the previous frame did not ask for again (quads out
   // of view) are dropped from the queue.
   void begin_frame();
@@ -68,7 +88,7 @@ class CpuLayerProcessing {
   void work();
 
   std::mutex mutex_;
-  std::condition_variable wake_;
+  std::condition_variable wake_, finished_cv_;
   bool stopping_ = false;
   uint32_t latest_version_ = 0;  // results of older versions are dropped
   struct Done {
@@ -78,6 +98,7 @@ class CpuLayerProcessing {
   std::map<Key, Job> queued_;
   std::map<Key, Done> done_;
   uint64_t frame_ = 0, finished_ = 0;
+  double job_seconds_ = 0;  // a running mean of a job's seconds
   std::vector<std::jthread> threads_;
 };
 

@@ -6,6 +6,7 @@
 #include <cstring>
 #include <map>
 #include <numeric>
+#include <set>
 
 #include <fmt/format.h>
 
@@ -266,6 +267,7 @@ class GlTerrainRenderer final : public TerrainRenderer {
     made_this_frame_ = 0;
     processed_this_frame_ = 0;
     if (cpu_) cpu_->begin_frame();
+    if (!layers_.empty()) RELIEF_CHECK(process_view_on_cpu(selection, uploads, stats));
     const uint64_t uploads_before = slots_.uploads(), evicted_before = slots_.evicted();
     const lod::MeshTopology& mesh = elevation_.mesh();
     records_.clear();
@@ -547,6 +549,17 @@ class GlTerrainRenderer final : public TerrainRenderer {
     const auto start = Clock::now();
     const tiles::Store& ref = *layers_[reference_].store;
     const int width = ref.grid().width() + 2, height = ref.grid().height() + 2;
+    if (layers_.size() == 1 && processed[0] &&
+        processed[0]->type() == tiles::SampleType::UInt8) {  // colours made on the CPU
+      made.layer = RELIEF_TRY(
+          slots_.insert({a, true, version_}, width, height, processed[0]->u8().data(), uploads));
+      if (cpu_) cpu_->forget({0, keys[0], version_});
+      ++stats.layer_tiles_processed;
+      const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
+      stats.processing_seconds += seconds;
+      processed_this_frame_ += seconds;
+      return made;
+    }
     const int slot =
         RELIEF_TRY(slots_.insert({a, true, version_}, width, height, nullptr, uploads));
     std::vector<gpuprocess::OperatorChain> chains(layers_.size());
@@ -602,6 +615,35 @@ class GlTerrainRenderer final : public TerrainRenderer {
     return made;
   }
 
+  // Layers processed on the CPU in an interactive frame: the view's own
+  // composites are asked for first (jobs submitted where the layers' tiles
+  // are resident; missing tiles are requested and never waited for), then,
+  // when the workers' estimate fits what is left of the processing budget,
+  // the frame waits for them (at most that long). Processing is not I/O: a
+  // view whose processing fits is complete in this frame, not the next; one
+  // that does not shows ancestors meanwhile, as before. The wait is not
+  // charged to the budget of making composites: uploading results that are
+  // ready costs little, and dropping them would waste the wait.
+  Status process_view_on_cpu(const lod::Selection& selection, gl::Uploads& uploads,
+                             FrameStats& stats) {
+    const bool wanted = std::ranges::any_of(
+        layers_, [&](const TextureLayer& l) { return on_cpu(l) && !l.tiles->blocking(); });
+    if (!wanted) return {};
+    const int finest = layers_[reference_].store->manifest().max_level;
+    std::set<TileKey> asked;
+    for (const lod::SelectedQuad& quad : selection.quads) {
+      const int level = std::min(quad.key.level, finest), up = quad.key.level - level;
+      const TileKey a{level, quad.key.x >> up, quad.key.y >> up};
+      if (asked.insert(a).second) RELIEF_TRY(make_composite(a, quad.priority, uploads, stats));
+    }
+    const double left = processing_per_frame_ - processed_this_frame_;
+    if (!cpu_ || !(cpu_->estimated_seconds() <= left)) return {};
+    const auto start = Clock::now();
+    cpu_->wait_idle(left);
+    stats.processing_wait_seconds += std::chrono::duration<double>(Clock::now() - start).count();
+    return {};
+  }
+
   // Whether layer l's chain runs on the CPU (ProcessOn).
   bool on_cpu(const TextureLayer& l) const {
     if (l.chain.steps.empty() || !l.lenses.empty()) return false;
@@ -620,10 +662,16 @@ class GlTerrainRenderer final : public TerrainRenderer {
     job.border = man.border;
     job.stats = {man.stats.min, man.stats.max, man.stats.mean, man.stats.stddev};
     job.priority = priority;
+    // The layer alone makes the composite: the colour mapping runs on the
+    // CPU too, and the frame only uploads the colours.
+    if (layers_.size() == 1) job.colours = {{l.range_min, l.range_max, l.colormap, l.opacity}};
     if (l.tiles->blocking()) {
       ThreadExecutor executor;
       auto out = gpuprocess::run_chain_cpu(job.chain, *tile, job.border, &job.stats, executor);
       if (!out) return fail(out.error().message);
+      if (const auto& c = job.colours) {
+        *out = gpuprocess::map_colours_cpu(*out, c->range_min, c->range_max, c->map, c->opacity);
+      }
       return std::make_shared<const tiles::Raster>(std::move(*out));
     }
     if (!cpu_) cpu_ = std::make_unique<CpuLayerProcessing>(0);

@@ -54,6 +54,15 @@ struct CompositeLayer {
   geo::GeoBox bounds;
 };
 
+// The layer pass's colour mapping on the CPU, for a composite made of one
+// single-band layer whose tile is the composite's (`values`: the processed
+// tile's interior plus a one-sample border, as run_chain_cpu leaves it):
+// premultiplied RGBA8 of the same size, nodata transparent. The same float
+// arithmetic as the shader; the GPU's conversion to 8 bits may round a
+// value on a half level the other way (one level at most).
+tiles::Raster map_colours_cpu(const tiles::Raster& values, float range_min, float range_max,
+                              ColorMap map, float opacity);
+
 class Compositor {
  public:
   // Needs a current GL 4.5 core context.

@@ -61,6 +61,9 @@ struct FrameStats {
   // for a tile (a frame with any is not complete).
   uint32_t layer_tiles_processed = 0, texture_misses = 0;
   double processing_seconds = 0;
+  // Layers processed on the CPU (ProcessOn::cpu): the seconds the frame
+  // waited for the workers to finish the view's tiles (within the budget).
+  double processing_wait_seconds = 0;
 };
 
 // A texture layer draped over the terrain (docs/gpu-processing.md,
