@@ -27,21 +27,16 @@ inline bool stencil_inside(const Raster& bordered, int border, int i, int j) {
   return bx >= 1 && by >= 1 && bx + 1 < bordered.width() && by + 1 < bordered.height();
 }
 
-// Whether a cell is valid and the range of its 5 vertices, without its
-// planes: enough to decide that a cell cannot matter (geometric_error.cpp).
-inline void set_cell_range(MeshCell& cell, float centre, float c00, float c10, float c01, float c11,
-                           bool inside) {
+// A cell from its centre sample and corner heights (h00, h10, h01, h11). The
+// 4 corners average the whole 3 x 3 stencil, so the stencil holds no nodata
+// exactly when neither they nor the centre are NaN (samples are finite).
+inline MeshCell make_cell(float centre, float c00, float c10, float c01, float c11, bool inside) {
+  MeshCell cell;
   const double c = centre, h00 = c00, h10 = c10, h01 = c01, h11 = c11;
   cell.valid = inside && !std::isnan(c) && !std::isnan(h00) && !std::isnan(h10) &&
                !std::isnan(h01) && !std::isnan(h11);
   cell.lo = std::min({c, h00, h10, h01, h11});
   cell.hi = std::max({c, h00, h10, h01, h11});
-}
-
-// The planes of the cell's 4 triangles.
-inline void set_cell_planes(MeshCell& cell, float centre, float c00, float c10, float c01,
-                            float c11) {
-  const double c = centre, h00 = c00, h10 = c10, h01 = c01, h11 = c11;
   // The centre (1/2, 1/2) has height c; each triangle interpolates it with
   // the two corners of its edge.
   const double planes[4][3] = {
@@ -55,15 +50,6 @@ inline void set_cell_planes(MeshCell& cell, float centre, float c00, float c10, 
     cell.b[t] = planes[t][1];
     cell.c[t] = planes[t][2];
   }
-}
-
-// A cell from its centre sample and corner heights (h00, h10, h01, h11). The
-// 4 corners average the whole 3 x 3 stencil, so the stencil holds no nodata
-// exactly when neither they nor the centre are NaN (samples are finite).
-inline MeshCell make_cell(float centre, float c00, float c10, float c01, float c11, bool inside) {
-  MeshCell cell;
-  set_cell_range(cell, centre, c00, c10, c01, c11, inside);
-  set_cell_planes(cell, centre, c00, c10, c01, c11);
   return cell;
 }
 

@@ -122,11 +122,10 @@ void raise_deviation(const Raster& fine, const BlockRanges& ranges, const Raster
       const float* k =
           &corners[static_cast<size_t>(y) * static_cast<size_t>(nx + 1) + static_cast<size_t>(x)];
       const float* k1 = k + nx + 1;
-      const float centre = centres[static_cast<size_t>(j + border) * centre_stride +
-                                   static_cast<size_t>(i + border)];
-      MeshCell cell;
-      set_cell_range(cell, centre, k[0], k[1], k1[0], k1[1],
-                     stencil_inside(ancestor, border, i, j));
+      const MeshCell cell =
+          make_cell(centres[static_cast<size_t>(j + border) * centre_stride +
+                            static_cast<size_t>(i + border)],
+                    k[0], k[1], k1[0], k1[1], stencil_inside(ancestor, border, i, j));
       if (!cell.valid) continue;  // the fall-off at the data's edge or a void
       // A cell of 2 x 2 samples costs about what its test would.
       if (m > 1) {
@@ -136,8 +135,6 @@ void raise_deviation(const Raster& fine, const BlockRanges& ranges, const Raster
         const double slack = 1e-9 * (1 + std::abs(cell.lo) + std::abs(cell.hi));
         if (bound + slack < worst) continue;
       }
-      // Only for the cells whose samples are visited: most are skipped.
-      set_cell_planes(cell, centre, k[0], k[1], k1[0], k1[1]);
       const int64_t ya = std::max(gy0, cj << m), yb = std::min(gy0 + h, (cj + 1) << m);
       const int64_t xa = std::max(gx0, ci << m), xb = std::min(gx0 + w, (ci + 1) << m);
       for (int64_t gy = ya; gy < yb; ++gy) {
