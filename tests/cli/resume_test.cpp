@@ -18,20 +18,28 @@ namespace relief::testing {
 namespace {
 namespace fs = std::filesystem;
 
-std::vector<std::string> build_args(const std::string& out) {
-  return {"build",
-          data("srtm/N55W004.hgt.zip"),
-          data("srtm/N55W003.hgt.zip"),
-          "-o",
-          out,
-          "--kind",
-          "elevation",
-          "--max-level",
-          "11",
-          "--threads",
-          "1",
-          "-q"};
+std::vector<std::string> build_args(const std::string& out,
+                                    const std::vector<std::string>& extra = {}) {
+  std::vector<std::string> args = {"build",
+                                   data("srtm/N55W004.hgt.zip"),
+                                   data("srtm/N55W003.hgt.zip"),
+                                   "-o",
+                                   out,
+                                   "--kind",
+                                   "elevation",
+                                   "--max-level",
+                                   "11",
+                                   "--threads",
+                                   "1",
+                                   "-q"};
+  args.insert(args.end(), extra.begin(), extra.end());
+  return args;
 }
+
+// A budget whose core cache holds about 26 of the ~150 finest interiors of
+// this build (1 thread: 52 MiB reserved, a third of the rest for GDAL): the
+// others are spilled to .build/cores and read back from there.
+const std::vector<std::string> kSpillingMemory = {"--memory", "72MiB"};
 
 std::map<std::string, std::vector<std::byte>> store_files(const fs::path& root) {
   std::map<std::string, std::vector<std::byte>> files;
@@ -67,38 +75,38 @@ size_t count_files(const fs::path& dir) {
   return n;
 }
 
-TEST(Resume, KilledBuildsResumeToTheSameStore) {
-  ScratchDir dir("resume");
+struct KillPoint {
+  const char* name;
+  std::function<bool(const fs::path&)> ready;
+};
+
+// Kills a build of `extra` options at each point and resumes it: the store
+// must be the uninterrupted build's, byte for byte. `after_kill` checks the
+// killed build's directory.
+void expect_resumes_to_the_same_store(const ScratchDir& dir, const std::vector<std::string>& extra,
+                                      const std::vector<KillPoint>& points,
+                                      const std::function<void(const fs::path&)>& after_kill) {
   const fs::path clean = dir / "clean";
-  ASSERT_EQ(run_relief(build_args(clean.string())).exit_code, 0);
+  if (!fs::exists(clean / "manifest.json")) {
+    ASSERT_EQ(run_relief(build_args(clean.string())).exit_code, 0);
+  }
   const auto expected = store_files(clean);
   ASSERT_GT(expected.size(), 100u);
-
-  const fs::path cores = ".build/cores/11";
-  struct KillPoint {
-    const char* name;
-    std::function<bool(const fs::path&)> ready;
-  };
-  const std::vector<KillPoint> points = {
-      {"while warping", [&](const fs::path& s) { return count_files(s / cores) >= 5; }},
-      {"while building the pyramid",
-       [](const fs::path& s) { return fs::exists(s / ".build/cores/9"); }},
-      {"while writing tiles", [](const fs::path& s) { return count_files(s / "11") >= 20; }},
-  };
   for (const auto& point : points) {
     SCOPED_TRACE(point.name);
     const fs::path out = dir / "killed";
     fs::remove_all(out);
-    const int pid = spawn_relief(build_args(out.string()));
+    const int pid = spawn_relief(build_args(out.string(), extra));
     ASSERT_GT(pid, 0);
     ASSERT_TRUE(kill_when(pid, [&] { return point.ready(out); }));
     EXPECT_FALSE(fs::exists(out / "manifest.json")) << "killed before completion";
+    after_kill(out);
     // A write cut short leaves at most its temporary file, never a partial tile.
     fs::create_directories(out / "11");
     std::ofstream(out / "11" / ("000.rtile" + std::string(kTempMarker) + "1.0")) << "partial";
     // A plain `verify` refuses an incomplete store rather than trusting it.
     EXPECT_NE(run_relief({"verify", out.string(), "-q"}).exit_code, 0);
-    auto resumed = run_relief(build_args(out.string()));
+    auto resumed = run_relief(build_args(out.string(), extra));
     ASSERT_EQ(resumed.exit_code, 0) << resumed.err;
     EXPECT_EQ(run_relief({"verify", out.string(), "-q"}).exit_code, 0);
     const auto got = store_files(out);
@@ -109,6 +117,37 @@ TEST(Resume, KilledBuildsResumeToTheSameStore) {
       EXPECT_TRUE(it->second == bytes) << name << " differs from the uninterrupted build";
     }
   }
+}
+
+// Within the memory budget the interiors never touch the disk: a killed
+// build has no scratch cores, and the resumed one computes them again.
+TEST(Resume, KilledBuildsResumeToTheSameStore) {
+  ScratchDir dir("resume");
+  const std::vector<KillPoint> points = {
+      {"as it starts", [](const fs::path& s) { return fs::exists(s / ".build/state.json"); }},
+      {"while writing coarse tiles", [](const fs::path& s) { return fs::exists(s / "6"); }},
+      {"while writing the finest tiles",
+       [](const fs::path& s) { return count_files(s / "11") >= 20; }},
+  };
+  expect_resumes_to_the_same_store(dir, {}, points, [](const fs::path& out) {
+    EXPECT_EQ(count_files(out / ".build/cores"), 0u) << "interiors within the budget were written";
+  });
+}
+
+// Beyond the budget, interiors are spilled to .build/cores (and read back
+// from there); a resumed build takes the spilled ones and computes the rest.
+TEST(Resume, KilledBuildsThatSpillInteriorsResumeToTheSameStore) {
+  ScratchDir dir("resume_spill");
+  const fs::path cores = ".build/cores";
+  const std::vector<KillPoint> points = {
+      {"while warping", [&](const fs::path& s) { return count_files(s / cores / "11") >= 5; }},
+      {"while building the pyramid",
+       [&](const fs::path& s) { return fs::exists(s / cores / "10"); }},
+      {"while writing tiles", [](const fs::path& s) { return count_files(s / "11") >= 20; }},
+  };
+  expect_resumes_to_the_same_store(dir, kSpillingMemory, points, [&](const fs::path& out) {
+    EXPECT_GT(count_files(out / cores), 0u);
+  });
 }
 
 // Killed after the manifest's rename but before .build/ is removed (the last
@@ -159,7 +198,7 @@ TEST(Resume, KilledAfterTheScratchIsRemovedResumesToTheSameStore) {
   const fs::path out = dir / "killed";
   const int pid = spawn_relief(build_args(out.string()));
   ASSERT_GT(pid, 0);
-  ASSERT_TRUE(kill_when(pid, [&] { return count_files(out / ".build/cores/11") >= 2; }));
+  ASSERT_TRUE(kill_when(pid, [&] { return fs::exists(out / ".build/state.json"); }));
   const std::string state = *read_text_file(out / ".build/state.json");
   ASSERT_EQ(run_relief(build_args(out.string())).exit_code, 0);
   const auto expected = store_files(out);
@@ -186,7 +225,7 @@ TEST(Resume, InterruptedBuildWithOtherParametersIsRefused) {
   ScratchDir dir("resume_params");
   const fs::path out = dir / "s";
   const int pid = spawn_relief(build_args(out.string()));
-  ASSERT_TRUE(kill_when(pid, [&] { return count_files(out / ".build/cores/11") >= 2; }));
+  ASSERT_TRUE(kill_when(pid, [&] { return fs::exists(out / ".build/state.json"); }));
   auto other = build_args(out.string());
   other[8] = "10";  // --max-level
   auto r = run_relief(other);

@@ -387,7 +387,11 @@ class Builder {
     std::error_code ec;
     return fs::exists(marker(name), ec);
   }
-  Status mark_done(const std::string& name) {
+  // A phase is marked done only when every core it made is on disk: the
+  // cores held in memory die with a killed build, and a resumed one must
+  // compute them again rather than skip the phase.
+  Status mark_done(const std::string& name, int level) {
+    if (!cores_.all_on_disk(level)) return {};
     return write_text_file_atomic(marker(name), "done\n");
   }
 
@@ -453,7 +457,7 @@ class Builder {
     });
     progress_.end();
     RELIEF_CHECK(error.status());
-    return mark_done(phase);
+    return mark_done(phase, max_level_);
   }
 
   Status build_parents(int level) {
@@ -487,7 +491,7 @@ class Builder {
     });
     progress_.end();
     RELIEF_CHECK(error.status());
-    return mark_done(phase);
+    return mark_done(phase, level);
   }
 
   Result<LevelResult> write_level(int level) {

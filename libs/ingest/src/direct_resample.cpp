@@ -100,23 +100,33 @@ Status DirectResampler::resample(const geo::TileGrid& grid, const geo::TileKey& 
       return fail(fmt::format("tile {}: {}", key.to_string(), gdal_error("source read failed")));
     }
   }
-  // Validity of every window sample, once: a tap then costs one load.
-  thread_local std::vector<uint8_t> valid;
+  // Validity of every window sample, once: a tap then costs one load. And
+  // whether a whole window row is valid (most are), for the loop below.
+  thread_local std::vector<uint8_t> valid, row_valid;
   valid.resize(src.size());
-  for (size_t k = 0; k < src.size(); ++k) {
-    valid[k] = !std::isnan(src[k]) && !(has_nodata_ && src[k] == nodata_);
+  row_valid.resize(static_cast<size_t>(wh));
+  for (size_t r = 0; r < static_cast<size_t>(wh); ++r) {
+    uint8_t all = 1;
+    for (size_t k = r * static_cast<size_t>(ww); k < (r + 1) * static_cast<size_t>(ww); ++k) {
+      valid[k] = !std::isnan(src[k]) && !(has_nodata_ && src[k] == nodata_);
+      all &= valid[k];
+    }
+    row_valid[r] = all;
   }
   // Column offsets into a window row, -1 outside the window (= outside the raster).
   auto offset = [](int v, int lo, int hi) { return v < lo || v > hi ? -1 : v - lo; };
   struct ColumnTaps {
     int pixel, left, right;
+    bool full;  // inside the raster, its own pixel and both taps in the window
   };
   thread_local std::vector<ColumnTaps> col_taps;
   col_taps.resize(static_cast<size_t>(w));
   for (int i = 0; i < w; ++i) {
     const Tap& t = cols[static_cast<size_t>(i)];
-    col_taps[static_cast<size_t>(i)] = {offset(t.pixel, x0, x1), offset(t.index, x0, x1),
-                                        offset(t.index + 1, x0, x1)};
+    ColumnTaps c{offset(t.pixel, x0, x1), offset(t.index, x0, x1), offset(t.index + 1, x0, x1),
+                 false};
+    c.full = t.inside && c.pixel >= 0 && c.left >= 0 && c.right >= 0;
+    col_taps[static_cast<size_t>(i)] = c;
   }
   const size_t stride = static_cast<size_t>(ww);
   auto out = tile.f32();
@@ -131,9 +141,31 @@ Status DirectResampler::resample(const geo::TileGrid& grid, const geo::TileKey& 
     const size_t up = upper < 0 ? 0 : static_cast<size_t>(upper) * stride;
     const size_t low = lower < 0 ? 0 : static_cast<size_t>(lower) * stride;
     float* out_row = out.data() + static_cast<size_t>(j) * static_cast<size_t>(w);
+    // Rows whose own, upper and lower window rows are all valid: every tap of
+    // a full column is valid, and the sums below are the general loop's with
+    // each test true (the same operations in the same order, so the same bits).
+    const bool rows_valid = upper >= 0 && lower >= 0 && row_valid[static_cast<size_t>(own_row)] &&
+                            row_valid[static_cast<size_t>(upper)] &&
+                            row_valid[static_cast<size_t>(lower)];
+    for (int i = 0; rows_valid && i < w; ++i) {
+      const ColumnTaps c = col_taps[static_cast<size_t>(i)];
+      if (!c.full) continue;  // left to the general loop
+      const double rx = cols[static_cast<size_t>(i)].ratio;
+      const double m_ul = rx * ty.ratio, m_ur = (1.0 - rx) * ty.ratio;
+      const double m_ll = rx * (1.0 - ty.ratio), m_lr = (1.0 - rx) * (1.0 - ty.ratio);
+      const size_t l = static_cast<size_t>(c.left), r = static_cast<size_t>(c.right);
+      double divisor = 0, sum = 0;
+      divisor += m_ul, sum += src[up + l] * m_ul;
+      divisor += m_ur, sum += src[up + r] * m_ur;
+      divisor += m_ll, sum += src[low + l] * m_ll;
+      divisor += m_lr, sum += src[low + r] * m_lr;
+      if (divisor < 0.00001) continue;
+      out_row[i] = static_cast<float>(divisor == 1.0 ? sum : sum / divisor);
+    }
     for (int i = 0; i < w; ++i) {
       const Tap& tx = cols[static_cast<size_t>(i)];
       const ColumnTaps c = col_taps[static_cast<size_t>(i)];
+      if (rows_valid && c.full) continue;  // done above
       if (!tx.inside || c.pixel < 0 || !valid_own[c.pixel]) continue;
       auto tap = [&](int row_ok, size_t row, int col, double& v) {
         if (row_ok < 0 || col < 0 || !valid[row + static_cast<size_t>(col)]) return false;
