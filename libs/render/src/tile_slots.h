@@ -5,9 +5,10 @@
 // evicted. A tile is uploaded once when it arrives and stays resident while
 // it is used. Render thread only (it owns the GL context).
 //
-// Growing an array reallocates it and copies every layer (on llvmpipe a
-// zeroed allocation and a copy on the CPU: 50-500 ms at a few hundred
-// layers of 512 x 256), so arrays of uploaded tiles start at kFirstLayers and
+// Growing an array reallocates it and copies every layer (on llvmpipe, on a
+// loaded 2-core machine: 0.25 s from 64 to 128 layers of 530 x 274 R32F,
+// 0.6-0.85 s to 256, 1.9 s to 1024; uploading one layer takes 0.1 ms), so
+// arrays of uploaded tiles start at kFirstLayers and
 // grow only while a frame pins at least half their layers: a full array
 // otherwise reuses its least recently used unpinned layer, and a tile that
 // comes back is uploaded again from the memory cache (L2), a copy of one
