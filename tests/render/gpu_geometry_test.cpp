@@ -493,5 +493,91 @@ TEST(TileSlots, EvictsTheLeastRecentlyUsedAndReusesTheirLayers) {
   EXPECT_NE(full.error().message.find("more than 4 elevation tiles"), std::string::npos);
 }
 
+// The texels of one layer of a texture array of R32F 4 x 4 layers.
+std::vector<float> layer_texels(const gl::TextureArray& a, int layer) {
+  std::vector<float> out(static_cast<size_t>(a.width()) * a.height());
+  glGetTextureSubImage(a.id(), 0, 0, 0, layer, a.width(), a.height(), 1, GL_RED, GL_FLOAT,
+                       static_cast<GLsizei>(out.size() * sizeof(float)), out.data());
+  return out;
+}
+
+TEST(TextureArray, GrowsWithoutLosingItsLayers) {
+  gl();
+  gl::TextureArray a(GL_R32F, GL_RED, GL_FLOAT, 4);
+  a.set_layer_size(4, 4);
+  a.reserve(2);
+  gl::Uploads uploads;
+  const std::vector<float> ones(16, 1.0f), twos(16, 2.0f);
+  a.upload(0, ones.data(), uploads);
+  a.upload(1, twos.data(), uploads);
+  a.reserve(5);
+  EXPECT_EQ(a.layers(), 5);
+  EXPECT_EQ(layer_texels(a, 0), ones);
+  EXPECT_EQ(layer_texels(a, 1), twos);
+  EXPECT_EQ(uploads.textures, 2u * 64);  // the copy is GPU to GPU
+  EXPECT_EQ(gl_error(), "");
+}
+
+// A full array of uploaded tiles is not copied into a larger one while the
+// frame pins fewer than half its layers: the least recently used unpinned
+// layer is reused. It grows (keeping every layer) once a frame pins half.
+TEST(TileSlots, AFullArrayReusesALayerUnlessTheFramePinsHalfOfIt) {
+  gl();
+  TileSlots slots(uint64_t{1} << 30, 4096);
+  gl::Uploads uploads;
+  auto key = [](uint32_t x) { return TextureKey{TileKey{12, x, 0}, false}; };
+  auto pixels = [](uint32_t x) { return std::vector<float>(16, static_cast<float>(x)); };
+  const uint32_t n = TileSlots::kFirstLayers;
+  std::vector<int> layer_of;
+  slots.begin_frame();
+  for (uint32_t x = 0; x < n; ++x) {
+    auto layer = slots.insert(key(x), 4, 4, pixels(x).data(), uploads);
+    ASSERT_TRUE(layer);
+    layer_of.push_back(*layer);
+  }
+  EXPECT_EQ(slots.heights().layers(), static_cast<int>(n));  // one allocation, no growth
+  EXPECT_EQ(slots.pinned(false), static_cast<int>(n));
+  // The next frame pins a quarter of the tiles and needs one more: tile n/4,
+  // the least recently used of the others, gives its layer.
+  slots.begin_frame();
+  for (uint32_t x = 0; x < n / 4; ++x) ASSERT_TRUE(slots.find(key(x)));
+  EXPECT_EQ(slots.pinned(false), static_cast<int>(n / 4));
+  auto added = slots.insert(key(n), 4, 4, pixels(n).data(), uploads);
+  ASSERT_TRUE(added);
+  EXPECT_EQ(*added, layer_of[n / 4]);
+  EXPECT_EQ(slots.heights().layers(), static_cast<int>(n));
+  EXPECT_FALSE(slots.find(key(n / 4)));
+  EXPECT_EQ(slots.evicted(), 1u);
+  EXPECT_EQ(layer_texels(slots.heights(), *added), pixels(n));
+  // A frame that pins half the layers makes the array grow; no layer is lost.
+  slots.begin_frame();
+  for (uint32_t x = n / 2; x < n; ++x) ASSERT_TRUE(slots.find(key(x)));
+  ASSERT_TRUE(slots.insert(key(n + 1), 4, 4, pixels(n + 1).data(), uploads));
+  EXPECT_EQ(slots.heights().layers(), static_cast<int>(2 * n));
+  EXPECT_EQ(slots.evicted(), 1u);
+  for (uint32_t x : {0u, n / 2, n - 1, n, n + 1}) {
+    const auto layer = slots.find(key(x));
+    ASSERT_TRUE(layer) << x;
+    EXPECT_EQ(layer_texels(slots.heights(), *layer), pixels(x)) << x;
+  }
+}
+
+// Composites (written on the GPU, costly to remake) are kept: their array
+// grows, up to what the budget holds, rather than reuse a layer.
+TEST(TileSlots, CompositesGrowTheArrayRatherThanGiveUpALayer) {
+  gl();
+  TileSlots slots(uint64_t{1} << 30, 4096);
+  gl::Uploads uploads;
+  auto key = [](uint32_t x) { return TextureKey{TileKey{12, x, 0}, true, 1}; };
+  const uint32_t n = TileSlots::kFirstLayers;
+  slots.begin_frame();
+  for (uint32_t x = 0; x < n; ++x) ASSERT_TRUE(slots.insert(key(x), 4, 4, nullptr, uploads));
+  slots.begin_frame();
+  ASSERT_TRUE(slots.insert(key(n), 4, 4, nullptr, uploads));
+  EXPECT_EQ(slots.imagery().layers(), static_cast<int>(2 * n));
+  EXPECT_EQ(slots.evicted(), 0u);
+  EXPECT_EQ(uploads.textures, 0u);
+}
+
 }  // namespace
 }  // namespace relief::render

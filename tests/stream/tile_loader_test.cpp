@@ -8,9 +8,13 @@
 // anything took on this machine.
 #include <gtest/gtest.h>
 
+#include <sys/resource.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <fstream>
 #include <mutex>
 #include <set>
 #include <thread>
@@ -430,6 +434,38 @@ TEST_F(TileLoaderTest, ASuddenTurnCancelsStaleRequests) {
     last = std::move(*s);
   }
   EXPECT_EQ(last->stats.waiting, 0u);
+}
+
+// The nice values of this process's threads named `name` (Linux: per thread).
+std::vector<int> nice_of_threads(const std::string& name) {
+  std::vector<int> out;
+  for (const auto& task : std::filesystem::directory_iterator("/proc/self/task")) {
+    std::string comm;
+    std::getline(std::ifstream(task.path() / "comm"), comm);
+    if (comm != name) continue;
+    out.push_back(getpriority(PRIO_PROCESS, std::stoi(task.path().filename().string())));
+  }
+  return out;
+}
+
+// The workers run below the render thread's priority (they would otherwise
+// take the cores llvmpipe and the render thread need); the loader returns
+// only once they all do. With worker_nice 0, at the creator's priority.
+TEST_F(TileLoaderTest, WorkersRunAtALowerPriorityThanTheThreadThatCreatesThem) {
+  open(0ms);
+  const int own = getpriority(PRIO_PROCESS, gettid());
+  loader({.max_in_flight = 3});
+  std::vector<int> nice = nice_of_threads("relief-loader");
+  ASSERT_EQ(nice.size(), 3u);
+  for (int n : nice) EXPECT_EQ(n, std::min(19, own + 10));
+  EXPECT_EQ(getpriority(PRIO_PROCESS, gettid()), own);
+  loader_.reset();  // joins its workers
+  EXPECT_TRUE(nice_of_threads("relief-loader").empty());
+  source_->render_thread_may_fetch = true;  // level 0 again
+  loader({.max_in_flight = 2, .worker_nice = 0});
+  nice = nice_of_threads("relief-loader");
+  ASSERT_EQ(nice.size(), 2u);
+  for (int n : nice) EXPECT_EQ(n, own);
 }
 
 }  // namespace

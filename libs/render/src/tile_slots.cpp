@@ -20,6 +20,7 @@ uint64_t TileSlots::allocated_bytes() const {
 std::optional<int> TileSlots::find(const TextureKey& key) {
   auto it = entries_.find(key);
   if (it == entries_.end()) return std::nullopt;
+  if (it->second.frame != frame_) ++pool(key.imagery).pinned;
   it->second.frame = frame_;
   order_.splice(order_.begin(), order_, it->second.position);
   return it->second.layer;
@@ -57,11 +58,14 @@ Result<int> TileSlots::insert(const TextureKey& key, int width, int height, cons
         "the frame needs more than {} {} tiles on the GPU at once (GL_MAX_ARRAY_TEXTURE_LAYERS)",
         max_layers_, key.imagery ? "imagery" : "elevation"));
   }
+  // Full, with fewer than half its layers pinned: a layer is reused rather
+  // than every layer copied into a larger array (uploaded tiles only).
+  if (p.free.empty() && pixels && 2 * p.pinned < p.array.layers()) evict_one(key.imagery);
   if (p.free.empty()) {
     // Double, but not past what the budget holds unless the frame needs it.
     const int old = p.array.layers();
     const int fits = static_cast<int>(std::min<uint64_t>(budget_ / bytes, uint64_t(max_layers_)));
-    int layers = std::max(16, old * 2);
+    int layers = old == 0 ? kFirstLayers : old * 2;
     if (layers > fits) layers = std::max(fits, old + 16);
     layers = std::min(layers, max_layers_);
     p.array.reserve(layers);
@@ -74,6 +78,7 @@ Result<int> TileSlots::insert(const TextureKey& key, int width, int height, cons
   entries_.emplace(key, Entry{layer, bytes, frame_, order_.begin()});
   used_ += bytes;
   ++uploads_;
+  ++p.pinned;
   return layer;
 }
 

@@ -2,12 +2,17 @@
 
 #include <algorithm>
 #include <cassert>
+#include <cerrno>
 #include <cmath>
 #include <condition_variable>
 #include <list>
 #include <mutex>
 #include <thread>
 #include <unordered_map>
+
+#include <pthread.h>
+#include <sys/resource.h>
+#include <unistd.h>
 
 #include "relief/tiles/store.h"
 
@@ -36,6 +41,19 @@ struct Request {
   double priority;
   bool prefetch;
 };
+
+// Names the calling thread and lowers its CPU priority by `nice` steps. Best
+// effort: raising one's own nice value needs no privilege, and a loader whose
+// workers kept the normal priority still works.
+void become_loader_worker(int nice) {
+  pthread_setname_np(pthread_self(), "relief-loader");
+  if (nice <= 0) return;
+  const auto tid = static_cast<id_t>(gettid());
+  errno = 0;
+  const int current = getpriority(PRIO_PROCESS, tid);  // -1 is a valid nice value
+  if (errno != 0) return;
+  setpriority(PRIO_PROCESS, tid, std::min(19, current + nice));
+}
 
 }  // namespace
 
@@ -77,8 +95,9 @@ struct TileLoader::Impl {
   const tiles::Store& store;
   LoaderOptions options;
   mutable std::mutex mutex;
-  std::condition_variable wake;
+  std::condition_variable wake, ready;
   bool stopping = false;
+  int workers_ready = 0;  // set their priority: create() returns after all have
   std::unordered_map<TileKey, Entry, geo::TileKeyHash> entries;
   std::list<TileKey> lru;      // resident, most recent first
   std::vector<Request> queue;  // ascending priority: workers take the back
@@ -157,7 +176,10 @@ struct TileLoader::Impl {
   }
 
   void work() {
+    become_loader_worker(options.worker_nice);
     std::unique_lock lock(mutex);
+    ++workers_ready;
+    ready.notify_all();
     for (;;) {
       wake.wait(lock, [&] { return stopping || !queue.empty(); });
       if (stopping) return;
@@ -232,6 +254,11 @@ Result<std::unique_ptr<TileLoader>> TileLoader::create(const tiles::Store& store
   }
   for (int i = 0; i < options.max_in_flight; ++i) {
     impl->workers.emplace_back([p = impl.get()] { p->work(); });
+  }
+  {
+    // No load starts before every worker runs at its priority.
+    std::unique_lock lock(impl->mutex);
+    impl->ready.wait(lock, [&] { return impl->workers_ready == options.max_in_flight; });
   }
   return std::unique_ptr<TileLoader>(new TileLoader(std::move(impl)));
 }

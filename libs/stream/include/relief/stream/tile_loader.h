@@ -5,7 +5,10 @@
 //
 // Threads: the render thread calls everything here; worker threads (as many
 // as loads may be in flight) read and decode tiles. Event listeners run on
-// the render thread, in begin_frame().
+// the render thread, in begin_frame(). The workers run at a lower CPU
+// priority (LoaderOptions::worker_nice) and are named "relief-loader": on a
+// machine with few cores (llvmpipe rasterising on the same cores) they take
+// what the render thread and the rasteriser leave, not an equal share.
 //
 // Priority: each frame's requests (from selection, with view priorities)
 // replace the previous frame's queue; queued tiles no frame wants any more are
@@ -45,6 +48,11 @@ struct LoaderOptions {
   // What the retry pauses are measured on (tests pass a ManualClock); must
   // outlive the loader.
   const Clock* clock = &steady_clock();
+  // Added to the workers' nice value (Linux: per thread; capped at 19):
+  // eight decoding workers at the render thread's priority would take most
+  // of two cores from it and llvmpipe's rasteriser threads. 0: the same
+  // priority as the thread that creates the loader.
+  int worker_nice = 10;
 };
 
 struct LevelUse {
