@@ -110,6 +110,10 @@ struct QuadDecisions {
   std::array<std::vector<float>, 4> edges;
   std::vector<DecisionBlock> blocks;
   std::vector<uint32_t> halves;
+  // Frames in a row in which none of its blocks was reused: from kIdle on,
+  // its decisions are recorded only every kProbe frames (recording costs
+  // ~15 % of refinement; a fast camera leaves nothing to reuse).
+  uint32_t idle = 0;
 };
 
 struct RefineHistory::Impl {
@@ -123,6 +127,7 @@ struct RefineHistory::Impl {
   };
   std::vector<ViewAt> views;
   uint64_t first_view = 0;
+  uint64_t frame = 0;
   std::vector<QuadDecisions> records;
   QuadMap<uint32_t> index{256};
   // The last frame's mesh and what it left unresolved, for a frame of the
@@ -208,6 +213,7 @@ constexpr double kMoveShare = 0.01, kTurn = 0.004, kBand = 0.03;
 constexpr double kMinBudget = 1.0 / 16, kMaxBudget = 4;
 // Views kept: a block decided longer ago is decided again.
 constexpr size_t kViews = 64;
+constexpr uint32_t kIdle = 2, kProbe = 4;
 // Margins kept against rounding: relative on bounds and distances (their
 // rounding is ~1e-15), metres on distances, radians on angles (acos near 0
 // loses ~1e-8).
@@ -275,6 +281,8 @@ struct Quad {
   std::vector<Block> blocks;
   std::vector<uint32_t> halves;  // recorded this frame
   bool all_reused = false;
+  bool recording = true;
+  uint32_t idle = 0;  // evaluations in a row that reused none of its blocks
 };
 
 // What pixels() computed, for the margins of its decision.
@@ -445,12 +453,17 @@ class Refiner {
       r.level_error = q.level_error;
       r.errors = q.errors;
       for (size_t k = 0; k < 4; ++k) r.edges[k] = q.edge[k].values();
+      r.idle = q.idle;
       r.blocks.resize(q.blocks.size());
       for (size_t b = 0; b < q.blocks.size(); ++b) {
         Quad::Block& qb = q.blocks[b];
         DecisionBlock& d = r.blocks[b];
         d = qb.state;
         if (qb.reused) continue;
+        if (!q.recording) {  // nothing recorded: decided afresh next time
+          d.margins = d.later = false;
+          continue;
+        }
         // Margins too short for the motion checked: a smaller one next time;
         // margins that held until the view went beyond them: a larger one.
         const DecisionBlock* before = q.old ? &q.old->blocks[b] : nullptr;
@@ -592,7 +605,12 @@ class Refiner {
         qb.turned = m->turned;
       }
       stats_.quads_reused += q.all_reused;
+      bool any = false;
+      for (const Quad::Block& qb : q.blocks) any = any || qb.reused;
+      q.idle = any ? 0 : r ? r->idle + 1 : 0;
+      q.recording = q.idle < kIdle || h.frame % kProbe == 0;
     }
+    ++h.frame;
     reuse_all_ = all;
     if (reuse_all_) {
       for (const Quad& q : quads_) stats_.marks_reused += q.old->halves.size();
@@ -890,11 +908,26 @@ class Refiner {
     return e.pixels;
   }
 
+  // tan(kTurn * budget + kAngleSlack + asin(kMoveShare * budget)) for the
+  // budgets 2^-4 .. 2^2.
+  static double widening(double budget) {
+    static const std::array<double, 7> table = [] {
+      std::array<double, 7> t{};
+      for (int i = 0; i < 7; ++i) {
+        const double b = std::ldexp(1.0, i - 4);
+        t[static_cast<size_t>(i)] = std::tan(kTurn * b + kAngleSlack + std::asin(kMoveShare * b));
+      }
+      return t;
+    }();
+    return table[static_cast<size_t>(std::clamp(std::ilogb(budget) + 4, 0, 6))];
+  }
+
   // Records one half of a decision (QuadDecisions says which) with its margins.
   void record(int q, GridPoint p, const Criterion& c, bool stuck) {
+    Quad& quad = quads_[static_cast<size_t>(q)];
+    if (!quad.recording) return;
     const bool over = c.pixels > o_.pixel_error;
     if (over ? stuck : grid_.sides(p) != 0) return;
-    Quad& quad = quads_[static_cast<size_t>(q)];
     Quad::Block& b = quad.blocks[block_of(p)];
     quad.halves.push_back(pack(p, over));
     if (b.reused) b.state.later = true;
@@ -958,24 +991,24 @@ class Refiner {
     }
     const double move = kMoveShare * b.state.budget * e.z_min, turn = kTurn * b.state.budget;
     const double w = turn + kAngleSlack;
-    const double gamma = std::asin(std::min(1.0, move / e.z_min));
-    const double phi = std::atan(e.tangent);
+    // tan(w + asin(move / z_min)): the angles add by tan(a + b) = (tan a +
+    // tan b) / (1 - tan a tan b), with tan a = T.
+    const double u = widening(b.state.budget), T = e.tangent;
     const double k = view_.pixels_per_radian * metres;
     bool holds = false;
     if (kept) {  // by the angle bound
       const double z = e.z_min - move - far * turn - kSlackMetres;
-      const double widest = phi + w + gamma;
-      if (z > 0 && widest < kPi / 2) {
+      if (z > 0 && T * u < 1) {
         const double s = std::min(1.0, e.sin_bound + w), c = std::min(1.0, e.cos_bound + w);
-        holds = k * (s + std::tan(widest) * c) / z <= b.keep_below * (1 - kSafety);
+        holds = k * (s + (T + u) / (1 - T * u) * c) / z <= b.keep_below * (1 - kSafety);
       }
     } else {  // split: both bounds stay over t
       const double z = e.z_min + move + far * turn + kSlackMetres;
       const double s = std::max(0.0, e.sin_bound - w), c = std::max(0.0, e.cos_bound - w);
-      const double narrowest = std::max(0.0, phi - w - gamma);
+      const double narrowest = T > u ? (T - u) / (1 + T * u) : 0.0;
       const double t = b.split_over * (1 + kSafety);
       holds = k * (1 + corner_) / (e.distance + move + kSlackMetres) > t &&
-              k * (s + std::tan(narrowest) * c) / z > t;
+              k * (s + narrowest * c) / z > t;
     }
     if (!holds) {
       b.state.margins = false;
