@@ -386,7 +386,7 @@ TEST(Refine, RefusesQuadsDeeperThanTheDataAndSelectionsWithoutNeighbours) {
 }
 
 // Reusing decisions (RefineHistory): over a camera moving by small and
-// large steps, turning and changing its threshold, every frame refined with
+// large steps (then small again), turning and changing its threshold, every frame refined with
 // the history draws the mesh refinement without it draws, so the bound holds
 // (checked by brute force on the frames that reused quads), and reusing
 // saves most of the criteria while the camera moves slowly.
@@ -400,7 +400,9 @@ TEST(Refine, ReusedDecisionsGiveTheMeshOfAFreshRefinement) {
   for (int i = 0; i < 6; ++i) steps.push_back({30000 - 20.0 * i, 20, -35, 1.0});   // forward
   for (int i = 1; i <= 6; ++i) steps.push_back({29900, 20 + 0.05 * i, -35, 1.0});  // turning
   for (int i = 1; i <= 4; ++i) steps.push_back({29900, 20.3, -35 + 0.05 * i, 1.0 + 0.01 * i});
-  for (int i = 1; i <= 4; ++i) steps.push_back({29900 - 800.0 * i, 20.3 + i, -34.8, 1.04});
+  // Fast: nothing to reuse, quads record only every few frames; then slow again.
+  for (int i = 1; i <= 9; ++i) steps.push_back({29900 - 800.0 * i, 20.3 + i, -34.8, 1.04});
+  for (int i = 1; i <= 3; ++i) steps.push_back({22700 - 20.0 * i, 29.3, -34.8, 1.04});
   steps.push_back(steps.back());  // still
   uint64_t evaluated = 0, fresh_evaluated = 0, reused_marks = 0;
   uint64_t forward_evaluated = 0, forward_fresh = 0;
@@ -442,7 +444,7 @@ TEST(Refine, ReusedDecisionsGiveTheMeshOfAFreshRefinement) {
     if (with->stats.quads_reused > 0 && i % 2 == 0) {
       ++frames_reusing;
       const Measured e = measure(t, *view, s, *with, 60);
-      EXPECT_GT(e.compared, 500u);
+      EXPECT_GT(e.compared, 300u);
       EXPECT_LE(e.worst, st.pixel_error) << e.worst << " px over " << e.compared << " samples";
     }
   }

@@ -466,12 +466,13 @@ class Refiner {
         }
         // Margins too short for the motion checked: a smaller one next time;
         // margins that held until the view went beyond them: a larger one.
-        const DecisionBlock* before = q.old ? &q.old->blocks[b] : nullptr;
+        const DecisionBlock* before =
+            q.old && q.old->blocks.size() == q.blocks.size() ? &q.old->blocks[b] : nullptr;
         d.budget = qb.budget_short             ? std::max(d.budget / 2, kMinBudget)
                    : before && before->margins ? std::min(d.budget * 2, kMaxBudget)
                                                : d.budget;
       }
-      if (q.old) {  // the reused blocks' halves, then this frame's
+      if (q.old && !q.blocks.empty()) {  // the reused blocks' halves, then this frame's
         for (const uint32_t e : q.old->halves) {
           if (q.blocks[block_of(unpack(e))].reused) r.halves.push_back(e);
         }
@@ -574,41 +575,46 @@ class Refiner {
     const size_t blocks = static_cast<size_t>(block_columns_) * block_rows_;
     for (size_t i = 0; i < quads_.size(); ++i) {
       Quad& q = quads_[i];
-      q.blocks.resize(blocks);
       const uint32_t* at = h.index.find(selection_.quads[i].key);
       QuadDecisions* r = at ? &h.records[*at] : nullptr;
       if (r && same_inputs(*r, i)) q.old = r;
       all = all && q.old && h.keys[i] == selection_.quads[i].key;
-      q.all_reused = q.old != nullptr;
-      for (size_t b = 0; b < blocks; ++b) {
-        Quad::Block& qb = q.blocks[b];
+      auto fresh = [&](Quad::Block& qb, size_t b) {
         qb.state.view = now;
         if (r && r->blocks.size() == blocks) qb.state.budget = r->blocks[b].budget;
         const double band = steady ? 0.0 : kBand * qb.state.budget;
         qb.keep_below = o_.pixel_error * (1 - band);
         qb.split_over = o_.pixel_error * (1 + band);
-        if (!q.old || q.old->blocks.size() != blocks) {
-          q.all_reused = false;
-          continue;
+      };
+      bool any = false;
+      q.all_reused = q.old && q.old->blocks.size() == blocks;
+      if (q.all_reused) {
+        q.blocks.resize(blocks);
+        for (size_t b = 0; b < blocks; ++b) {
+          Quad::Block& qb = q.blocks[b];
+          fresh(qb, b);
+          const DecisionBlock& d = q.old->blocks[b];
+          const Motion* m = d.view >= h.first_view && d.view < now
+                                ? &motions[static_cast<size_t>(d.view - h.first_view)]
+                                : nullptr;
+          qb.reused = m && ((m->same && !d.later) ||
+                            (d.margins && m->moved <= d.move && m->turned <= d.turn &&
+                             d.lowest <= o_.pixel_error && o_.pixel_error <= d.highest));
+          q.all_reused = q.all_reused && qb.reused;
+          any = any || qb.reused;
+          if (!qb.reused) continue;
+          qb.state = d;
+          qb.moved = m->moved;
+          qb.turned = m->turned;
         }
-        const DecisionBlock& d = q.old->blocks[b];
-        const Motion* m = d.view >= h.first_view && d.view < now
-                              ? &motions[static_cast<size_t>(d.view - h.first_view)]
-                              : nullptr;
-        qb.reused = m && ((m->same && !d.later) ||
-                          (d.margins && m->moved <= d.move && m->turned <= d.turn &&
-                           d.lowest <= o_.pixel_error && o_.pixel_error <= d.highest));
-        q.all_reused = q.all_reused && qb.reused;
-        if (!qb.reused) continue;
-        qb.state = d;
-        qb.moved = m->moved;
-        qb.turned = m->turned;
       }
       stats_.quads_reused += q.all_reused;
-      bool any = false;
-      for (const Quad::Block& qb : q.blocks) any = any || qb.reused;
       q.idle = any ? 0 : r ? r->idle + 1 : 0;
-      q.recording = q.idle < kIdle || h.frame % kProbe == 0;
+      q.recording = any || q.idle < kIdle || h.frame % kProbe == 0;
+      if (q.recording && q.blocks.empty()) {
+        q.blocks.resize(blocks);
+        for (size_t b = 0; b < blocks; ++b) fresh(q.blocks[b], b);
+      }
     }
     ++h.frame;
     reuse_all_ = all;
@@ -622,7 +628,7 @@ class Refiner {
   void apply_history() {
     for (size_t i = 0; i < quads_.size(); ++i) {
       const Quad& q = quads_[i];
-      if (!q.old) continue;
+      if (!q.old || q.blocks.empty()) continue;
       for (const uint32_t e : q.old->halves) {
         const GridPoint p = unpack(e);
         if (!q.blocks[block_of(p)].reused) continue;
