@@ -173,7 +173,9 @@ nlohmann::json stats_json(const window::ViewerSummary& s, const std::string& ren
                       {"refine",
                        {{"ms", f.refine_ms},
                         {"cpu_ms", f.refine_cpu_ms},
-                        {"marks_evaluated", f.marks_evaluated}}},
+                        {"marks_evaluated", f.marks_evaluated},
+                        {"marks_reused", f.marks_reused},
+                        {"quads_reused", f.quads_reused}}},
                       {"process_cpu_ms", f.process_cpu_ms}});
   }
   auto fps = [](double ms) { return ms > 0 ? 1e3 / ms : 0.0; };

@@ -107,6 +107,8 @@ json refine_json(const view::FrameReport& r) {
   return {{"ms", s.seconds * 1e3},
           {"cpu_ms", s.cpu_seconds * 1e3},
           {"marks_evaluated", s.marks_evaluated},
+          {"marks_reused", s.marks_reused},
+          {"quads_reused", s.quads_reused},
           {"tiles_measured", s.tiles_measured},
           {"tiles_prepared", s.tiles_prepared},
           {"tiles_cached", r.refine_cache_tiles},

@@ -385,5 +385,107 @@ TEST(Refine, RefusesQuadsDeeperThanTheDataAndSelectionsWithoutNeighbours) {
   EXPECT_NE(m.error().message.find("neighbour_indices"), std::string::npos) << m.error().message;
 }
 
+// Reusing decisions (RefineHistory): over a camera moving by small and
+// large steps (then small again), turning and changing its threshold, every frame refined with
+// the history draws the mesh refinement without it draws, so the bound holds
+// (checked by brute force on the frames that reused quads), and reusing
+// saves most of the criteria while the camera moves slowly.
+TEST(Refine, ReusedDecisionsGiveTheMeshOfAFreshRefinement) {
+  Terrain& t = pyrenees();
+  RefineHistory history;
+  struct Step {
+    double range, heading, pitch, pixel_error;
+  };
+  std::vector<Step> steps;
+  for (int i = 0; i < 6; ++i) steps.push_back({30000 - 20.0 * i, 20, -35, 1.0});   // forward
+  for (int i = 1; i <= 6; ++i) steps.push_back({29900, 20 + 0.05 * i, -35, 1.0});  // turning
+  for (int i = 1; i <= 4; ++i) steps.push_back({29900, 20.3, -35 + 0.05 * i, 1.0 + 0.01 * i});
+  // Fast: nothing to reuse, quads record only every few frames; then slow again.
+  for (int i = 1; i <= 9; ++i) steps.push_back({29900 - 800.0 * i, 20.3 + i, -34.8, 1.04});
+  for (int i = 1; i <= 3; ++i) steps.push_back({22700 - 20.0 * i, 29.3, -34.8, 1.04});
+  steps.push_back(steps.back());  // still
+  uint64_t evaluated = 0, fresh_evaluated = 0, reused_marks = 0;
+  uint64_t forward_evaluated = 0, forward_fresh = 0;
+  uint32_t reused = 0, frames_reusing = 0;
+  for (size_t i = 0; i < steps.size(); ++i) {
+    SCOPED_TRACE(i);
+    const Step& st = steps[i];
+    auto view = make_view(look_at(1.45, 42.55, 1500, st.range, st.heading, st.pitch, 60, 640, 480));
+    ASSERT_TRUE(view);
+    const Selection s = select(t, *view, st.pixel_error);
+    RefineOptions o;
+    o.pixel_error = st.pixel_error;
+    o.cache = &t.cache;
+    o.history = &history;
+    auto with = refine(*view, t.terrain, s, o);
+    ASSERT_TRUE(with) << with.error().message;
+    const RefinedMesh fresh = refined(t, *view, s, st.pixel_error, RefineVariant::kTopDown);
+    ASSERT_EQ(with->indices, fresh.indices);
+    ASSERT_EQ(with->quads.size(), fresh.quads.size());
+    for (size_t q = 0; q < fresh.quads.size(); ++q) {
+      EXPECT_EQ(with->quads[q].first_index, fresh.quads[q].first_index);
+      EXPECT_EQ(with->quads[q].index_count, fresh.quads[q].index_count);
+    }
+    EXPECT_EQ(with->stats.unresolved, fresh.stats.unresolved);
+    // The same quads wanted split (found in another order: fewer decisions).
+    std::vector<geo::TileKey> a = with->stats.split_wanted, b = fresh.stats.split_wanted;
+    std::sort(a.begin(), a.end());
+    std::sort(b.begin(), b.end());
+    EXPECT_EQ(a, b);
+    EXPECT_EQ(fresh.stats.quads_reused, 0u);
+    evaluated += with->stats.marks_evaluated;
+    fresh_evaluated += fresh.stats.marks_evaluated;
+    if (i >= 1 && i <= 5) {  // moving forward by 20 m at 30 km
+      forward_evaluated += with->stats.marks_evaluated;
+      forward_fresh += fresh.stats.marks_evaluated;
+    }
+    reused += with->stats.quads_reused;
+    reused_marks += with->stats.marks_reused;
+    if (with->stats.quads_reused > 0 && i % 2 == 0) {
+      ++frames_reusing;
+      const Measured e = measure(t, *view, s, *with, 60);
+      EXPECT_GT(e.compared, 300u);
+      EXPECT_LE(e.worst, st.pixel_error) << e.worst << " px over " << e.compared << " samples";
+    }
+  }
+  EXPECT_GT(frames_reusing, 3u);
+  EXPECT_GT(reused, 0u);
+  EXPECT_GT(reused_marks, 0u);
+  EXPECT_LT(forward_evaluated * 2, forward_fresh);
+  EXPECT_LT(evaluated, fresh_evaluated);
+}
+
+// A camera that does not move reuses every quad's decisions and evaluates no
+// criterion; one that jumps elsewhere reuses none.
+TEST(Refine, AStaticCameraReusesEveryQuadAndAJumpNone) {
+  Terrain& t = pyrenees();
+  RefineHistory history;
+  RefineOptions o;
+  o.cache = &t.cache;
+  o.history = &history;
+  std::vector<uint32_t> first;
+  for (int frame = 0; frame < 3; ++frame) {
+    SCOPED_TRACE(frame);
+    auto view = make_view(case_named(frame < 2 ? "oblique" : "low").camera);
+    ASSERT_TRUE(view);
+    const Selection s = select(t, *view, 1.0);
+    auto m = refine(*view, t.terrain, s, o);
+    ASSERT_TRUE(m) << m.error().message;
+    ASSERT_EQ(m->stats.unresolved, 0u);
+    if (frame == 0) {
+      EXPECT_EQ(m->stats.quads_reused, 0u);
+      first = m->indices;
+    } else if (frame == 1) {
+      EXPECT_EQ(m->stats.quads_reused, s.quads.size());
+      EXPECT_EQ(m->stats.marks_evaluated, 0u);
+      EXPECT_GT(m->stats.marks_reused, 1000u);
+      EXPECT_EQ(m->indices, first);
+    } else {
+      EXPECT_EQ(m->stats.quads_reused, 0u);
+      EXPECT_EQ(m->indices, refined(t, *view, s, 1.0, RefineVariant::kTopDown).indices);
+    }
+  }
+}
+
 }  // namespace
 }  // namespace relief::lod

@@ -126,9 +126,11 @@ TEST_F(SceneTest, InteractiveFramesRefineWithDiamondErrorsPreparedOffTheRenderTh
   EXPECT_EQ(still->refine->tiles_prepared, 0u);
   ASSERT_TRUE(live->last_refined() && complete->last_refined());
   EXPECT_EQ(live->last_selection().quads.size(), complete->last_selection().quads.size());
+  // The same mesh (the live scene may reuse decisions of its earlier frames:
+  // lod::RefineHistory, so not the same count of criteria evaluated).
   EXPECT_EQ(live->last_refined()->indices, complete->last_refined()->indices);
-  EXPECT_EQ(live->last_refined()->stats.marks_evaluated,
-            complete->last_refined()->stats.marks_evaluated);
+  EXPECT_GT(live->last_refined()->stats.marks_evaluated + live->last_refined()->stats.marks_reused,
+            0u);
 }
 
 // The loader's threads of an edge-mark scene measure the diamond errors, not

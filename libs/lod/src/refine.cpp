@@ -17,6 +17,7 @@
 #include "diamond_errors.h"
 #include "edge_marks.h"
 #include "mark_blocks.h"
+#include "quad_map.h"
 #include "relief/geo/ellipsoid.h"
 #include "relief/lod/screen_error.h"
 
@@ -78,6 +79,73 @@ struct RefineCache::Impl {
   }
 };
 
+// The decisions of the last frames (Reusing decisions, below). A quad's grid
+// is cut into blocks of 2^s x 2^s cells; each block has the view its margins
+// are relative to (an id into RefineHistory::Impl::views), how far the eye
+// may move and the view turn from there, and the thresholds they hold for.
+struct DecisionBlock {
+  uint64_t view = 0;
+  double move = INFINITY, turn = INFINITY;  // metres and radians
+  // The thresholds its decisions hold for: those kept stay under the
+  // lowest, those split over the highest.
+  double lowest = 0, highest = INFINITY;
+  bool margins = true;  // every decision has them (else: the same view and threshold only)
+  bool later = false;   // has decisions made at a later view (so not the same view's only)
+  double budget = 1;    // scale of the motion checked at its next evaluation
+};
+
+// One quad's: what its decisions depend on besides the view, its blocks, and
+// the halves of diamonds it recorded: (x, y, over t) packed as x | y << 15 |
+// over << 31. Recorded: the halves whose criterion is over t and which split
+// (not stuck), and those under t off the quad's sides. Not recorded (decided
+// afresh whenever reached): halves on the sides under t (the other half may
+// change) and stuck ones over t (their unresolved statistics).
+struct QuadDecisions {
+  geo::TileKey key;
+  std::array<geo::TileKey, 8> neighbours{};  // level -1: none
+  uint8_t finer_sides = 0, coarse_sides = 0, coarse_corners = 0;
+  uint8_t parent_data_sides = 0, parent_data_corners = 0;
+  double level_error = 0;
+  std::shared_ptr<const DiamondErrors> errors;  // held: compared by address
+  std::array<std::vector<float>, 4> edges;
+  std::vector<DecisionBlock> blocks;
+  std::vector<uint32_t> halves;
+  // Frames in a row in which none of its blocks was reused: from kIdle on,
+  // its decisions are recorded only every kProbe frames (recording costs
+  // ~15 % of refinement; a fast camera leaves nothing to reuse).
+  uint32_t idle = 0;
+};
+
+struct RefineHistory::Impl {
+  // What every record depends on.
+  const TerrainModel* terrain = nullptr;
+  double pixels_per_radian = 0, tan_half_x = 0, tan_half_y = 0;
+  // The views of the last frames, ids first_view.. (older blocks are not reused).
+  struct ViewAt {
+    Vec3 eye, right, up, forward;
+    double pixel_error = 0;
+  };
+  std::vector<ViewAt> views;
+  uint64_t first_view = 0;
+  uint64_t frame = 0;
+  std::vector<QuadDecisions> records;
+  QuadMap<uint32_t> index{256};
+  // The last frame's mesh and what it left unresolved, for a frame of the
+  // same view and selection.
+  std::vector<geo::TileKey> keys;
+  std::vector<uint32_t> indices;
+  std::vector<RefinedQuad> quads;
+  uint64_t unresolved = 0;
+  double max_unresolved_pixels = 0;
+  std::vector<geo::TileKey> split_wanted;
+};
+
+RefineHistory::RefineHistory() : impl_(std::make_unique<Impl>()) {}
+RefineHistory::~RefineHistory() = default;
+void RefineHistory::clear() {
+  impl_ = std::make_unique<Impl>();
+}
+
 namespace {
 
 // The grid of every quad of a store (its tiles' width: 2n cells of half a sample).
@@ -137,6 +205,19 @@ constexpr double kArc = 6.41e6;
 constexpr double kRounding = 1e-3;
 constexpr uint8_t kUnknown = 0, kSplit = 1, kKept = 2;
 constexpr uint8_t kSideBits[4] = {kWest, kEast, kNorth, kSouth};
+// Reusing decisions: the motion a recording quad's margins are checked for,
+// per unit of its budget (adapted per quad between kMinBudget and kMaxBudget):
+// the eye moving this share of a box's depth, the view turning this angle.
+// and the threshold changing by this share (when it changed since the last frame).
+constexpr double kMoveShare = 0.01, kTurn = 0.004, kBand = 0.03;
+constexpr double kMinBudget = 1.0 / 16, kMaxBudget = 4;
+// Views kept: a block decided longer ago is decided again.
+constexpr size_t kViews = 64;
+constexpr uint32_t kIdle = 2, kProbe = 4;
+// Margins kept against rounding: relative on bounds and distances (their
+// rounding is ~1e-15), metres on distances, radians on angles (acos near 0
+// loses ~1e-8).
+constexpr double kSafety = 1e-9, kSlackMetres = 1e-6, kAngleSlack = 1e-7;
 
 // Range maxima over the heights by which the vertices of one side move when
 // they take the coarser neighbour's data (a sparse table).
@@ -152,6 +233,10 @@ class SideMax {
     }
   }
   bool empty() const { return table_.empty(); }
+  const std::vector<float>& values() const {
+    static const std::vector<float> none;
+    return table_.empty() ? none : table_[0];
+  }
   // Largest value in [a, b], clamped to the side.
   float max(int32_t a, int32_t b) const {
     const int32_t last = static_cast<int32_t>(table_[0].size()) - 1;
@@ -185,10 +270,32 @@ struct Quad {
   std::shared_ptr<const DiamondErrors> errors;  // null: no data, height 0
   std::array<SideMax, 4> edge;                  // west, east, north, south
   uint8_t blocking = 0;                         // Side bits: shared with a coarser selected quad
+  // Reusing decisions (RefineHistory).
+  QuadDecisions* old = nullptr;  // the last record of this quad, if it still applies
+  struct Block {
+    DecisionBlock state;  // a reused block's, or a new one at this frame's view
+    bool reused = false, budget_short = false;
+    double moved = 0, turned = 0;           // since state.view
+    double keep_below = 0, split_over = 0;  // the thresholds margins are checked for
+  };
+  std::vector<Block> blocks;
+  std::vector<uint32_t> halves;  // recorded this frame
+  bool all_reused = false;
+  bool recording = true;
+  uint32_t idle = 0;  // evaluations in a row that reused none of its blocks
+};
+
+// What pixels() computed, for the margins of its decision.
+struct Criterion {
+  double pixels = 0, metres = 0;
+  bool quick = false;  // settled by the distance bound from the ball
+  double near = 0;     // the ball's distance
+  double far = 0;      // bounds the distance of the box's corners
+  VerticalErrorParts parts;
 };
 
 struct Located {
-  int quad;
+  int quad = -1;
   GridPoint p;
 };
 
@@ -203,7 +310,12 @@ class Refiner {
         cache_(cache),
         marks_(marks),
         grid_(grid_of(terrain)),
-        top_down_(options.variant == RefineVariant::kTopDown) {}
+        top_down_(options.variant == RefineVariant::kTopDown),
+        history_(options.history ? &options.history->impl() : nullptr),
+        corner_(view.tan_half_x * view.tan_half_x + view.tan_half_y * view.tan_half_y),
+        block_shift_(std::max(grid_.k() - 3, 0)),
+        block_columns_((2 * grid_.n() >> block_shift_) + 1),
+        block_rows_((grid_.n() >> block_shift_) + 1) {}
 
   Status prepare() {
     int deepest = 0;
@@ -227,6 +339,8 @@ class Refiner {
     marks_.reset(grid_, quads_.size());
     for (size_t i = 0; i < quads_.size(); ++i)
       RELIEF_CHECK(prepare(static_cast<int>(i), selection_.quads[i], quads_[i]));
+    if (history_) match_history();
+    if (reuse_all_) return {};
     // A side shared with finer quads is split at its midpoint (their corner).
     for (size_t i = 0; i < quads_.size(); ++i) {
       const uint8_t finer = selection_.quads[i].finer_sides;
@@ -239,8 +353,12 @@ class Refiner {
         if (finer & kSouth) split(q, {x, n});
       }
     }
+    if (history_) apply_history();
     return {};
   }
+
+  // The same view, threshold and selection as the last frame: its mesh.
+  bool reuse_all() const { return reuse_all_; }
 
   void top_down() {
     const int32_t n = grid_.n();
@@ -296,8 +414,234 @@ class Refiner {
     return out;
   }
 
+  RefinedMesh reused_mesh() const {
+    RefinedMesh out;
+    out.grid_k = grid_.k();
+    out.indices = history_->indices;
+    out.quads = history_->quads;
+    out.stats = stats_;
+    out.stats.unresolved = history_->unresolved;
+    out.stats.max_unresolved_pixels = history_->max_unresolved_pixels;
+    out.stats.split_wanted = history_->split_wanted;
+    return out;
+  }
+
+  // This frame's records replace the last ones.
+  void save_history(const RefinedMesh& mesh) {
+    if (!history_) return;
+    RefineHistory::Impl& h = *history_;
+    std::vector<QuadDecisions> records(quads_.size());
+    QuadMap<uint32_t> index(quads_.size());
+    std::vector<geo::TileKey> keys(quads_.size());
+    for (size_t i = 0; i < quads_.size(); ++i) {
+      Quad& q = quads_[i];
+      const SelectedQuad& s = selection_.quads[i];
+      QuadDecisions& r = records[i];
+      keys[i] = s.key;
+      index.set(s.key, static_cast<uint32_t>(i));
+      if (reuse_all_) {
+        r = std::move(*q.old);
+        continue;
+      }
+      r.key = s.key;
+      for (size_t k = 0; k < 8; ++k) r.neighbours[k] = neighbour_key(s, k);
+      r.finer_sides = s.finer_sides;
+      r.coarse_sides = s.coarse_sides;
+      r.coarse_corners = s.coarse_corners;
+      r.parent_data_sides = s.parent_data_sides;
+      r.parent_data_corners = s.parent_data_corners;
+      r.level_error = q.level_error;
+      r.errors = q.errors;
+      for (size_t k = 0; k < 4; ++k) r.edges[k] = q.edge[k].values();
+      r.idle = q.idle;
+      r.blocks.resize(q.blocks.size());
+      for (size_t b = 0; b < q.blocks.size(); ++b) {
+        Quad::Block& qb = q.blocks[b];
+        DecisionBlock& d = r.blocks[b];
+        d = qb.state;
+        if (qb.reused) continue;
+        if (!q.recording) {  // nothing recorded: decided afresh next time
+          d.margins = d.later = false;
+          continue;
+        }
+        // Margins too short for the motion checked: a smaller one next time;
+        // margins that held until the view went beyond them: a larger one.
+        const DecisionBlock* before =
+            q.old && q.old->blocks.size() == q.blocks.size() ? &q.old->blocks[b] : nullptr;
+        d.budget = qb.budget_short             ? std::max(d.budget / 2, kMinBudget)
+                   : before && before->margins ? std::min(d.budget * 2, kMaxBudget)
+                                               : d.budget;
+      }
+      if (q.old && !q.blocks.empty()) {  // the reused blocks' halves, then this frame's
+        for (const uint32_t e : q.old->halves) {
+          if (q.blocks[block_of(unpack(e))].reused) r.halves.push_back(e);
+        }
+      }
+      r.halves.insert(r.halves.end(), q.halves.begin(), q.halves.end());
+    }
+    h.records = std::move(records);
+    h.index = std::move(index);
+    h.keys = std::move(keys);
+    if (!reuse_all_) {
+      h.indices = mesh.indices;
+      h.quads = mesh.quads;
+      h.unresolved = mesh.stats.unresolved;
+      h.max_unresolved_pixels = mesh.stats.max_unresolved_pixels;
+      h.split_wanted = mesh.stats.split_wanted;
+    }
+  }
+
  private:
   int level(int q) const { return selection_.quads[static_cast<size_t>(q)].key.level; }
+
+  static uint32_t pack(GridPoint p, bool over) {
+    return static_cast<uint32_t>(p.x) | static_cast<uint32_t>(p.y) << 15 | uint32_t{over} << 31;
+  }
+  static GridPoint unpack(uint32_t e) {
+    return {static_cast<int32_t>(e & 0x7fff), static_cast<int32_t>((e >> 15) & 0xffff)};
+  }
+  size_t block_of(GridPoint p) const {
+    return static_cast<size_t>((p.y >> block_shift_) * block_columns_ + (p.x >> block_shift_));
+  }
+
+  geo::TileKey neighbour_key(const SelectedQuad& s, size_t k) const {
+    const int32_t j = s.neighbours[k];
+    return j >= 0 ? selection_.quads[static_cast<size_t>(j)].key : geo::TileKey{-1, 0, 0};
+  }
+
+  // Whether the record was made for the quad as selected now: the same
+  // neighbours (so the same marks mirror, block and split across), the same
+  // data (errors by address: the record holds them) and side heights.
+  bool same_inputs(const QuadDecisions& r, size_t i) const {
+    const SelectedQuad& s = selection_.quads[i];
+    const Quad& q = quads_[i];
+    for (size_t k = 0; k < 8; ++k) {
+      if (!(r.neighbours[k] == neighbour_key(s, k))) return false;
+    }
+    if (r.finer_sides != s.finer_sides || r.coarse_sides != s.coarse_sides ||
+        r.coarse_corners != s.coarse_corners || r.parent_data_sides != s.parent_data_sides ||
+        r.parent_data_corners != s.parent_data_corners || r.level_error != q.level_error ||
+        r.errors != q.errors) {
+      return false;
+    }
+    for (size_t k = 0; k < 4; ++k) {
+      if (r.edges[k] != q.edge[k].values()) return false;
+    }
+    return true;
+  }
+
+  static bool same(const Vec3& a, const Vec3& b) { return a.x == b.x && a.y == b.y && a.z == b.z; }
+
+  // Which blocks reuse their decisions: those of quads with the same inputs,
+  // within their margins of the motion since their view (how far the eye
+  // moved, and the angle the view turned: the basis change is a rotation by
+  // w with |right' - right|^2 + |up' - up|^2 + |forward' - forward|^2 =
+  // 8 sin^2(w / 2)), or at the same view and threshold.
+  void match_history() {
+    RefineHistory::Impl& h = *history_;
+    if (h.terrain != &terrain_ || h.pixels_per_radian != view_.pixels_per_radian ||
+        h.tan_half_x != view_.tan_half_x || h.tan_half_y != view_.tan_half_y) {
+      h = RefineHistory::Impl{};
+      h.terrain = &terrain_;
+      h.pixels_per_radian = view_.pixels_per_radian;
+      h.tan_half_x = view_.tan_half_x;
+      h.tan_half_y = view_.tan_half_y;
+    }
+    // A threshold that changes from frame to frame (speed-dependent level of
+    // detail): margins are also checked for a band of thresholds around it.
+    const bool steady = !h.views.empty() && h.views.back().pixel_error == o_.pixel_error;
+    struct Motion {
+      double moved, turned;
+      bool same;
+    };
+    std::vector<Motion> motions;
+    for (const RefineHistory::Impl::ViewAt& v : h.views) {
+      const Vec3 dr = view_.right - v.right, du = view_.up - v.up, df = view_.forward - v.forward;
+      const double sine = std::sqrt((dot(dr, dr) + dot(du, du) + dot(df, df)) / 8);
+      motions.push_back(
+          {length(view_.eye - v.eye), 2 * std::asin(std::min(1.0, sine)) + kAngleSlack,
+           same(view_.eye, v.eye) && same(view_.right, v.right) && same(view_.up, v.up) &&
+               same(view_.forward, v.forward) && v.pixel_error == o_.pixel_error});
+    }
+    const bool still = !motions.empty() && motions.back().same;
+    if (h.views.size() == kViews) {
+      h.views.erase(h.views.begin());
+      motions.erase(motions.begin());
+      ++h.first_view;
+    }
+    const uint64_t now = h.first_view + h.views.size();
+    h.views.push_back({view_.eye, view_.right, view_.up, view_.forward, o_.pixel_error});
+    bool all = still && h.keys.size() == quads_.size();
+    const size_t blocks = static_cast<size_t>(block_columns_) * block_rows_;
+    for (size_t i = 0; i < quads_.size(); ++i) {
+      Quad& q = quads_[i];
+      const uint32_t* at = h.index.find(selection_.quads[i].key);
+      QuadDecisions* r = at ? &h.records[*at] : nullptr;
+      if (r && same_inputs(*r, i)) q.old = r;
+      all = all && q.old && h.keys[i] == selection_.quads[i].key;
+      auto fresh = [&](Quad::Block& qb, size_t b) {
+        qb.state.view = now;
+        if (r && r->blocks.size() == blocks) qb.state.budget = r->blocks[b].budget;
+        const double band = steady ? 0.0 : kBand * qb.state.budget;
+        qb.keep_below = o_.pixel_error * (1 - band);
+        qb.split_over = o_.pixel_error * (1 + band);
+      };
+      bool any = false;
+      q.all_reused = q.old && q.old->blocks.size() == blocks;
+      if (q.all_reused) {
+        q.blocks.resize(blocks);
+        for (size_t b = 0; b < blocks; ++b) {
+          Quad::Block& qb = q.blocks[b];
+          fresh(qb, b);
+          const DecisionBlock& d = q.old->blocks[b];
+          const Motion* m = d.view >= h.first_view && d.view < now
+                                ? &motions[static_cast<size_t>(d.view - h.first_view)]
+                                : nullptr;
+          qb.reused = m && ((m->same && !d.later) ||
+                            (d.margins && m->moved <= d.move && m->turned <= d.turn &&
+                             d.lowest <= o_.pixel_error && o_.pixel_error <= d.highest));
+          q.all_reused = q.all_reused && qb.reused;
+          any = any || qb.reused;
+          if (!qb.reused) continue;
+          qb.state = d;
+          qb.moved = m->moved;
+          qb.turned = m->turned;
+        }
+      }
+      stats_.quads_reused += q.all_reused;
+      q.idle = any ? 0 : r ? r->idle + 1 : 0;
+      q.recording = any || q.idle < kIdle || h.frame % kProbe == 0;
+      if (q.recording && q.blocks.empty()) {
+        q.blocks.resize(blocks);
+        for (size_t b = 0; b < blocks; ++b) fresh(q.blocks[b], b);
+      }
+    }
+    ++h.frame;
+    reuse_all_ = all;
+    if (reuse_all_) {
+      for (const Quad& q : quads_) stats_.marks_reused += q.old->halves.size();
+    }
+  }
+
+  // The recorded decisions of the reused blocks: splits made, kept marks
+  // marked kept (decide() passes them).
+  void apply_history() {
+    for (size_t i = 0; i < quads_.size(); ++i) {
+      const Quad& q = quads_[i];
+      if (!q.old || q.blocks.empty()) continue;
+      for (const uint32_t e : q.old->halves) {
+        const GridPoint p = unpack(e);
+        if (!q.blocks[block_of(p)].reused) continue;
+        ++stats_.marks_reused;
+        if (e >> 31) {
+          split(static_cast<int>(i), p);
+        } else if (uint8_t& m = mark(static_cast<int>(i), p); m == kUnknown) {
+          m = kKept;
+        }
+      }
+    }
+  }
+
   uint8_t& mark(int q, GridPoint p) { return marks_.at(q, p); }
 
   Status prepare(int index, const SelectedQuad& s, Quad& q) {
@@ -509,7 +853,7 @@ class Refiner {
   // The split criterion's value for the part of diamond d inside quad q: the
   // screen bound of its error in a box around it and its descendants (nested
   // in its parents' boxes, so the value never grows from parent to child).
-  double pixels(int q, GridPoint p, const Diamond& d) {
+  double pixels(int q, GridPoint p, const Diamond& d, Criterion* out = nullptr) {
     const Quad& quad = quads_[static_cast<size_t>(q)];
     const int32_t n = grid_.n();
     double error = 0, lo = 0, hi = 0;
@@ -557,10 +901,127 @@ class Refiner {
       const double corner =
           view_.tan_half_x * view_.tan_half_x + view_.tan_half_y * view_.tan_half_y;
       const double bound = view_.pixels_per_radian * metres * (1 + corner) / near;
-      if (bound <= o_.pixel_error) return bound;
+      if (bound <= o_.pixel_error) {
+        if (out) *out = {bound, metres, true, near, 0, {}};
+        return bound;
+      }
     }
     const Box box{c - Vec3{radius, radius, radius}, c + Vec3{radius, radius, radius}};
-    return vertical_error_pixels(view_, box, area, metres);
+    const VerticalErrorParts e = vertical_error_parts(view_, box, area, metres);
+    if (out) {
+      *out = {e.pixels, metres, false, near, length(c - view_.eye) + std::sqrt(3.0) * radius, e};
+    }
+    return e.pixels;
+  }
+
+  // tan(kTurn * budget + kAngleSlack + asin(kMoveShare * budget)) for the
+  // budgets 2^-4 .. 2^2.
+  static double widening(double budget) {
+    static const std::array<double, 7> table = [] {
+      std::array<double, 7> t{};
+      for (int i = 0; i < 7; ++i) {
+        const double b = std::ldexp(1.0, i - 4);
+        t[static_cast<size_t>(i)] = std::tan(kTurn * b + kAngleSlack + std::asin(kMoveShare * b));
+      }
+      return t;
+    }();
+    return table[static_cast<size_t>(std::clamp(std::ilogb(budget) + 4, 0, 6))];
+  }
+
+  // Records one half of a decision (QuadDecisions says which) with its margins.
+  void record(int q, GridPoint p, const Criterion& c, bool stuck) {
+    Quad& quad = quads_[static_cast<size_t>(q)];
+    if (!quad.recording) return;
+    const bool over = c.pixels > o_.pixel_error;
+    if (over ? stuck : grid_.sides(p) != 0) return;
+    Quad::Block& b = quad.blocks[block_of(p)];
+    quad.halves.push_back(pack(p, over));
+    if (b.reused) b.state.later = true;
+    if (!b.state.margins || c.metres <= 0) return;  // 0 metres: 0 pixels from everywhere
+    if (over) {
+      b.state.highest = std::min(b.state.highest, b.split_over);
+    } else {
+      b.state.lowest = std::max(b.state.lowest, b.keep_below);
+    }
+    if (c.quick) {
+      keep_distance(b, c.near, c.metres);
+    } else {
+      margin(b, c.parts, c.metres, c.far);
+    }
+  }
+
+  // Reusing decisions: the margins of one criterion (pixels()) of a recording
+  // quad, as the motion of the eye (metres) and the view's turn (radians)
+  // within which its decision stays the same. Proof in "Reusing decisions".
+  //
+  // Kept by a distance bound f m (1 + t^2) / D <= t: D moves no more than
+  // the eye does, so the decision holds while the eye moves less than
+  // D - f m (1 + t^2) / t, whatever the view's direction.
+  void keep_distance(Quad::Block& b, double distance, double metres) {
+    const double needed = view_.pixels_per_radian * metres * (1 + corner_) / b.keep_below;
+    const double slack = distance * (1 - kSafety) - needed * (1 + kSafety) - kSlackMetres;
+    allow(b, slack, INFINITY);
+  }
+
+  // A decision made now holds within `move` and `turn` of this view: within
+  // move - moved and turn - turned of a reused block's (triangle inequality).
+  static void allow(Quad::Block& b, double move, double turn) {
+    move -= b.moved;
+    turn -= b.turned;
+    if (move < 0 || turn < 0) {
+      b.state.margins = false;
+      b.budget_short = true;
+      return;
+    }
+    b.state.move = std::min(b.state.move, move);
+    b.state.turn = std::min(b.state.turn, turn);
+  }
+
+  // Otherwise, for an eye motion of at most move = kMoveShare * budget * z_min
+  // and a turn of at most w = kTurn * budget: every corner's depth changes by
+  // at most move + far * w (far: the largest distance of a corner), the
+  // angle between a corner's direction and the view direction by at most
+  // w + asin(move / z_min), that between the view direction and a normal by
+  // at most w (so S and C by at most w), the box's distance by at most move.
+  // The criterion's value stays on its side of t when the bound computed with
+  // every term moved against it does.
+  void margin(Quad::Block& b, const VerticalErrorParts& e, double metres, double far) {
+    const bool kept = e.pixels <= o_.pixel_error;
+    if (kept && e.distance_bound <= b.keep_below) {
+      keep_distance(b, e.distance, metres);
+      return;
+    }
+    if (e.behind) {  // only the distance bound, and it does not do
+      b.state.margins = false;
+      return;
+    }
+    const double move = kMoveShare * b.state.budget * e.z_min, turn = kTurn * b.state.budget;
+    const double w = turn + kAngleSlack;
+    // tan(w + asin(move / z_min)): the angles add by tan(a + b) = (tan a +
+    // tan b) / (1 - tan a tan b), with tan a = T.
+    const double u = widening(b.state.budget), T = e.tangent;
+    const double k = view_.pixels_per_radian * metres;
+    bool holds = false;
+    if (kept) {  // by the angle bound
+      const double z = e.z_min - move - far * turn - kSlackMetres;
+      if (z > 0 && T * u < 1) {
+        const double s = std::min(1.0, e.sin_bound + w), c = std::min(1.0, e.cos_bound + w);
+        holds = k * (s + (T + u) / (1 - T * u) * c) / z <= b.keep_below * (1 - kSafety);
+      }
+    } else {  // split: both bounds stay over t
+      const double z = e.z_min + move + far * turn + kSlackMetres;
+      const double s = std::max(0.0, e.sin_bound - w), c = std::max(0.0, e.cos_bound - w);
+      const double narrowest = T > u ? (T - u) / (1 + T * u) : 0.0;
+      const double t = b.split_over * (1 + kSafety);
+      holds = k * (1 + corner_) / (e.distance + move + kSlackMetres) > t &&
+              k * (s + narrowest * c) / z > t;
+    }
+    if (!holds) {
+      b.state.margins = false;
+      b.budget_short = true;
+      return;
+    }
+    allow(b, move, turn);
   }
 
   // Evaluates the split criterion of an undecided mark (for both quads when
@@ -572,15 +1033,22 @@ class Refiner {
     if (!MarkGrid::splittable(d)) return;
     ++stats_.marks_evaluated;
     const std::optional<Located> other = mirror(q, p);
-    double px = pixels(q, p, d);
+    Criterion own, across;
+    Criterion* want = history_ ? &own : nullptr;
+    double px = pixels(q, p, d, want);
     bool stuck = blocked(q, p, d);
     // The half across a side shared with a finer quad may be a sample's
     // side there (the finer quad's mark is blocked then): that half is the
     // coarser quad's full mesh already, nothing to split.
-    if (other && MarkGrid::splittable(grid_.diamond(other->p))) {
+    const bool halves = other && MarkGrid::splittable(grid_.diamond(other->p));
+    if (halves) {
       const Diamond od = grid_.diamond(other->p);
-      px = std::max(px, pixels(other->quad, other->p, od));
+      px = std::max(px, pixels(other->quad, other->p, od, history_ ? &across : nullptr));
       stuck |= blocked(other->quad, other->p, od);
+    }
+    if (history_) {
+      record(q, p, own, stuck);
+      if (halves) record(other->quad, other->p, across, stuck);
     }
     if (px > o_.pixel_error && !stuck) {
       split(q, p);
@@ -624,6 +1092,11 @@ class Refiner {
   bool top_down_;
   std::vector<Located> stack_, work_;
   RefineStats stats_;
+  RefineHistory::Impl* history_;
+  double corner_;  // tan^2 of the screen's corner
+  bool reuse_all_ = false;
+  int block_shift_ = 0;  // blocks of 2^block_shift_ x 2^block_shift_ cells
+  int32_t block_columns_ = 0, block_rows_ = 0;
 };
 
 }  // namespace
@@ -646,12 +1119,18 @@ Result<RefinedMesh> refine(const View& view, TerrainModel& terrain, const Select
   thread_local MarkBlocks marks;
   Refiner r(view, terrain, selection, options, cache.impl(), marks);
   RELIEF_CHECK(r.prepare());
-  if (options.variant == RefineVariant::kTopDown) {
-    r.top_down();
+  RefinedMesh mesh;
+  if (r.reuse_all()) {
+    mesh = r.reused_mesh();
   } else {
-    r.bottom_up();
+    if (options.variant == RefineVariant::kTopDown) {
+      r.top_down();
+    } else {
+      r.bottom_up();
+    }
+    mesh = r.mesh();
   }
-  RefinedMesh mesh = r.mesh();
+  r.save_history(mesh);
   mesh.stats.seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   mesh.stats.cpu_seconds = thread_cpu_seconds() - cpu_start;

@@ -24,27 +24,42 @@ void angle_bounds(const View& view, const geo::GeoBox& area, double& s, double& 
 
 }  // namespace
 
-double vertical_error_pixels(const View& view, const Box& box, const geo::GeoBox& area,
-                             double metres) {
-  if (metres <= 0) return 0;
+VerticalErrorParts vertical_error_parts(const View& view, const Box& box, const geo::GeoBox& area,
+                                        double metres) {
+  VerticalErrorParts e;
+  if (metres <= 0) return e;
   const double f = view.pixels_per_radian;
   const double corner = view.tan_half_x * view.tan_half_x + view.tan_half_y * view.tan_half_y;
-  const double d = distance_to(box, view.eye);
-  double bound = d > 0 ? f * metres * (1 + corner) / d : INFINITY;
+  e.distance = distance_to(box, view.eye);
+  e.distance_bound = e.distance > 0 ? f * metres * (1 + corner) / e.distance : INFINITY;
+  e.pixels = e.distance_bound;
   double z_min = INFINITY, t = 0;
   for (int i = 0; i < 8; ++i) {
     const Vec3 p = Vec3{i & 1 ? box.hi.x : box.lo.x, i & 2 ? box.hi.y : box.lo.y,
                         i & 4 ? box.hi.z : box.lo.z} -
                    view.eye;
     const double z = dot(p, view.forward);
-    if (z <= 0) return bound;  // behind the eye: only the distance bound holds
+    if (z <= 0) {  // behind the eye: only the distance bound holds
+      e.behind = true;
+      return e;
+    }
     z_min = std::min(z_min, z);
     const double x = dot(p, view.right), y = dot(p, view.up);
     t = std::max(t, std::sqrt(x * x + y * y) / z);
   }
   double s = 1, c = 1;
   angle_bounds(view, area, s, c);
-  return std::min(bound, f * metres * (s + t * c) / z_min);
+  e.z_min = z_min;
+  e.tangent = t;
+  e.sin_bound = s;
+  e.cos_bound = c;
+  e.pixels = std::min(e.distance_bound, f * metres * (s + t * c) / z_min);
+  return e;
+}
+
+double vertical_error_pixels(const View& view, const Box& box, const geo::GeoBox& area,
+                             double metres) {
+  return vertical_error_parts(view, box, area, metres).pixels;
 }
 
 }  // namespace relief::lod

@@ -53,6 +53,9 @@ struct Scene::Impl {
   std::optional<lod::Camera> previous;             // of the last frame, unless cut
   lod::Selection last;
   std::optional<lod::RefinedMesh> last_refined;
+  // Edge-mark frames: the last frames' decisions, reused where the camera
+  // moved too little to change them (the same mesh, at a fraction of the cost).
+  lod::RefineHistory refine_history;
   uint64_t imagery_misses = 0;                 // a frame that missed imagery is not complete
   std::optional<lod::Camera> prefetch_camera;  // set_prefetch_camera()
   bool frozen = false;                         // set_selection_frozen()
@@ -272,6 +275,7 @@ Result<FrameReport> Scene::draw(const lod::Camera& camera, render::RenderTarget&
     ro.pixel_error = m.options.selection.pixel_error;
     ro.variant = m.options.refine_variant;
     ro.cache = m.refine_cache.get();
+    ro.history = &m.refine_history;
     refined = RELIEF_TRY(lod::refine(view, *m.terrain, selection, ro));
     // SceneOptions::split_feedback, interactive frames: what this frame's
     // refinement wanted split, the next frames split (complete frames stay a

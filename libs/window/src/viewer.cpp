@@ -285,6 +285,8 @@ Result<bool> Viewer::frame() {
       f.refine_ms = report.refine->seconds * 1e3;
       f.refine_cpu_ms = report.refine->cpu_seconds * 1e3;
       f.marks_evaluated = report.refine->marks_evaluated;
+      f.marks_reused = report.refine->marks_reused;
+      f.quads_reused = report.refine->quads_reused;
     }
     f.process_cpu_ms = v.index > 0 ? cpu_ms : 0.0;
   }

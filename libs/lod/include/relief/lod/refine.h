@@ -62,10 +62,31 @@ class RefineCache {
   std::shared_ptr<Impl> impl_;  // shared with the loader's threads
 };
 
+// What the last frames decided per quad, for the next frame to reuse where
+// the camera moved too little to change any decision (refine.cpp, "Reusing
+// decisions"): the mesh is the one refinement without history computes, at a
+// fraction of the cost. One per sequence of frames of one terrain (a scene),
+// used by one thread at a time.
+class RefineHistory {
+ public:
+  RefineHistory();
+  ~RefineHistory();
+  RefineHistory(const RefineHistory&) = delete;
+  RefineHistory& operator=(const RefineHistory&) = delete;
+  void clear();
+
+  struct Impl;
+  Impl& impl() { return *impl_; }
+
+ private:
+  std::unique_ptr<Impl> impl_;
+};
+
 struct RefineOptions {
   double pixel_error = 1.0;  // largest allowed screen-space error, pixels
   RefineVariant variant = RefineVariant::kTopDown;
-  RefineCache* cache = nullptr;  // null: a cache for this call only
+  RefineCache* cache = nullptr;      // null: a cache for this call only
+  RefineHistory* history = nullptr;  // null: every quad decided from scratch
 };
 
 // Needs a selection made with SelectionOptions::neighbour_indices, of quads no

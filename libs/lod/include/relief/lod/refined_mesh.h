@@ -24,7 +24,12 @@ struct RefinedQuad {
 };
 
 struct RefineStats {
-  uint64_t marks_evaluated = 0;      // split criteria evaluated
+  uint64_t marks_evaluated = 0;  // split criteria evaluated
+  // With a RefineHistory: quads whose decisions were the last evaluation's
+  // (the camera moved too little to change any), and the criteria that
+  // evaluation computed for them.
+  uint32_t quads_reused = 0;
+  uint64_t marks_reused = 0;
   uint64_t unresolved = 0;           // diamonds over the threshold that could not split
   double max_unresolved_pixels = 0;  // their largest projected error bound
   // Quads whose level error (TerrainModel::level_error) alone may project

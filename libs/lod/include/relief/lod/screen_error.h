@@ -31,4 +31,18 @@ namespace relief::lod {
 double vertical_error_pixels(const View& view, const Box& box, const geo::GeoBox& area,
                              double metres);
 
+// The same bound with the terms it is made of, for callers that bound how
+// far it can move when the view does (refine.cpp reusing decisions).
+struct VerticalErrorParts {
+  double pixels = 0;          // vertical_error_pixels()
+  double distance = 0;        // from the eye to the box
+  double distance_bound = 0;  // f m (1 + t^2) / distance (INFINITY at 0)
+  bool behind = false;        // a corner at or behind the eye: the distance bound alone
+  // When not behind: the box's smallest depth, its largest tangent T from
+  // the view direction, and the bounds S and C of |sin| and |cos|.
+  double z_min = 0, tangent = 0, sin_bound = 1, cos_bound = 1;
+};
+VerticalErrorParts vertical_error_parts(const View& view, const Box& box, const geo::GeoBox& area,
+                                        double metres);
+
 }  // namespace relief::lod

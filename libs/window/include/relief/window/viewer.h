@@ -70,9 +70,11 @@ struct ViewerFrame {
   uint64_t uploaded_bytes = 0;  // geometry and textures
   bool complete = false;
   // Edge-mark refinement (0 in the quad mode): wall-clock and the render
-  // thread's CPU time, split criteria evaluated.
+  // thread's CPU time, split criteria evaluated, and those of the quads
+  // whose last decisions were reused (lod::RefineHistory).
   double refine_ms = 0, refine_cpu_ms = 0;
-  uint64_t marks_evaluated = 0;
+  uint64_t marks_evaluated = 0, marks_reused = 0;
+  uint32_t quads_reused = 0;
   // CPU time of the whole process (render, loaders, llvmpipe's threads)
   // since the previous frame's start: what a frame costs on a shared machine.
   double process_cpu_ms = 0;
