@@ -65,16 +65,6 @@ bool kill_when(int pid, const std::function<bool()>& ready) {
   return WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL;
 }
 
-size_t count_files(const fs::path& dir) {
-  std::error_code ec;
-  size_t n = 0;
-  for (auto it = fs::recursive_directory_iterator(dir, ec);
-       !ec && it != fs::recursive_directory_iterator(); it.increment(ec)) {
-    n += it->is_regular_file() ? 1 : 0;
-  }
-  return n;
-}
-
 struct KillPoint {
   const char* name;
   std::function<bool(const fs::path&)> ready;
@@ -127,10 +117,11 @@ TEST(Resume, KilledBuildsResumeToTheSameStore) {
       {"as it starts", [](const fs::path& s) { return fs::exists(s / ".build/state.json"); }},
       {"while writing coarse tiles", [](const fs::path& s) { return fs::exists(s / "6"); }},
       {"while writing the finest tiles",
-       [](const fs::path& s) { return count_files(s / "11") >= 20; }},
+       [](const fs::path& s) { return regular_files_under(s / "11") >= 20; }},
   };
   expect_resumes_to_the_same_store(dir, {}, points, [](const fs::path& out) {
-    EXPECT_EQ(count_files(out / ".build/cores"), 0u) << "interiors within the budget were written";
+    EXPECT_EQ(regular_files_under(out / ".build/cores"), 0u)
+        << "interiors within the budget were written";
   });
 }
 
@@ -140,13 +131,15 @@ TEST(Resume, KilledBuildsThatSpillInteriorsResumeToTheSameStore) {
   ScratchDir dir("resume_spill");
   const fs::path cores = ".build/cores";
   const std::vector<KillPoint> points = {
-      {"while warping", [&](const fs::path& s) { return count_files(s / cores / "11") >= 5; }},
+      {"while warping",
+       [&](const fs::path& s) { return regular_files_under(s / cores / "11") >= 5; }},
       {"while building the pyramid",
        [&](const fs::path& s) { return fs::exists(s / cores / "10"); }},
-      {"while writing tiles", [](const fs::path& s) { return count_files(s / "11") >= 20; }},
+      {"while writing tiles",
+       [](const fs::path& s) { return regular_files_under(s / "11") >= 20; }},
   };
   expect_resumes_to_the_same_store(dir, kSpillingMemory, points, [&](const fs::path& out) {
-    EXPECT_GT(count_files(out / cores), 0u);
+    EXPECT_GT(regular_files_under(out / cores), 0u);
   });
 }
 
@@ -164,7 +157,7 @@ TEST(Resume, KilledAfterTheManifestIsFinishedByTheRerun) {
   const fs::path out = dir / "killed";
   const int pid = spawn_relief(build_args(out.string()));
   ASSERT_GT(pid, 0);
-  ASSERT_TRUE(kill_when(pid, [&] { return count_files(out / "11") >= 5; }));
+  ASSERT_TRUE(kill_when(pid, [&] { return regular_files_under(out / "11") >= 5; }));
   const fs::path saved = dir / "saved_build";
   fs::copy(out / ".build", saved, fs::copy_options::recursive);
   ASSERT_EQ(run_relief(build_args(out.string())).exit_code, 0);

@@ -42,6 +42,13 @@ std::vector<std::string> pyrenees_inputs() {
   return {data("srtm/N41E001.hgt.zip"), data("srtm/N42E001.hgt.zip")};
 }
 
+const tiles::Store& srtm_store(const std::string& tile) {
+  ingest::BuildOptions o;
+  o.inputs = {data("srtm/" + tile + ".hgt.zip")};
+  o.kind = tiles::DatasetKind::Elevation;
+  return built_store(tile, o);
+}
+
 const tiles::Store& pyrenees_store() {
   ingest::BuildOptions o;
   o.inputs = pyrenees_inputs();

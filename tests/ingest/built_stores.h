@@ -11,6 +11,9 @@ namespace relief::testing {
 // Builds (on first use) a store named `name` from `options` (output is filled in).
 const tiles::Store& built_store(const std::string& name, ingest::BuildOptions options);
 
+// One bundled SRTM tile (data/srtm/TILE.hgt.zip) as an elevation store.
+const tiles::Store& srtm_store(const std::string& tile);
+
 // The N41E001 + N42E001 pair (Catalonia + Pyrenees), lossless.
 const tiles::Store& pyrenees_store();
 std::vector<std::string> pyrenees_inputs();

@@ -14,6 +14,7 @@ namespace fs = std::filesystem;
 using geo::TileKey;
 using tiles::Raster;
 using tiles::SampleType;
+using testing::regular_files_under;
 
 constexpr int kW = 16, kH = 8;
 const tiles::TileShape kShape{SampleType::Float32, 1, kW, kH, 0};
@@ -24,16 +25,6 @@ Raster core_with(float base) {
   auto v = r.f32();
   for (size_t i = 0; i < v.size(); ++i) v[i] = base + static_cast<float>(i);
   return r;
-}
-
-size_t files_under(const fs::path& dir) {
-  std::error_code ec;
-  size_t n = 0;
-  for (auto it = fs::recursive_directory_iterator(dir, ec);
-       !ec && it != fs::recursive_directory_iterator(); it.increment(ec)) {
-    n += it->is_regular_file() ? 1 : 0;
-  }
-  return n;
 }
 
 void expect_core(CoreStore& store, const TileKey& key, float base) {
@@ -50,7 +41,7 @@ TEST(CoreStore, CoresWithinTheBudgetStayInMemory) {
   testing::ScratchDir dir("core_store_memory");
   CoreStore store(dir / "cores", kShape, 4 * kCoreBytes);
   for (uint32_t x = 0; x < 4; ++x) ASSERT_TRUE(store.write({5, x, 1}, core_with(100.0f * x)));
-  EXPECT_EQ(files_under(dir / "cores"), 0u);
+  EXPECT_EQ(regular_files_under(dir / "cores"), 0u);
   EXPECT_EQ(store.spilled(), 0u);
   EXPECT_FALSE(store.all_on_disk(5));
   EXPECT_TRUE(store.all_on_disk(4));  // nothing of that level
@@ -71,7 +62,7 @@ TEST(CoreStore, CoresBeyondTheBudgetAreSpilledAndReadBack) {
   for (uint32_t x = 0; x < 6; ++x) ASSERT_TRUE(store.write({5, x, 0}, core_with(10.0f * x)));
   // The least recently used went to disk; the last two are in memory only.
   EXPECT_EQ(store.spilled(), 4u);
-  EXPECT_EQ(files_under(dir / "cores"), 4u);
+  EXPECT_EQ(regular_files_under(dir / "cores"), 4u);
   EXPECT_FALSE(store.all_on_disk(5));
   ASSERT_EQ(store.list(5).size(), 6u);
   for (uint32_t x = 0; x < 6; ++x) expect_core(store, {5, x, 0}, 10.0f * x);

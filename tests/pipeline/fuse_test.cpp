@@ -18,13 +18,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const tiles::Store& single(const std::string& tile) {
-  ingest::BuildOptions o;
-  o.inputs = {data("srtm/" + tile + ".hgt.zip")};
-  o.kind = tiles::DatasetKind::Elevation;
-  return built_store(tile, o);
-}
-
 tiles::Store fuse(std::vector<fs::path> inputs, const fs::path& out, std::vector<double> weights,
                   pipeline::FuseMode mode = pipeline::FuseMode::Blend) {
   ThreadExecutor ex(2);
@@ -35,7 +28,7 @@ tiles::Store fuse(std::vector<fs::path> inputs, const fs::path& out, std::vector
 }
 
 TEST(Fuse, TwoTilesFusedMatchTheStoreBuiltFromBoth) {
-  const tiles::Store &north = single("N42E001"), &south = single("N41E001");
+  const tiles::Store &north = srtm_store("N42E001"), &south = srtm_store("N41E001");
   ScratchDir dir("fuse");
   const tiles::Store fused = fuse({north.root(), south.root()}, dir / "f", {});
   const tiles::Store& both = pyrenees_store();
@@ -69,7 +62,7 @@ TEST(Fuse, TwoTilesFusedMatchTheStoreBuiltFromBoth) {
 }
 
 TEST(Fuse, WeightsModesAndBoundsWithoutScanning) {
-  const tiles::Store &north = single("N42E001"), &south = single("N41E001");
+  const tiles::Store &north = srtm_store("N42E001"), &south = srtm_store("N41E001");
   ScratchDir dir("fuse_weights");
   // A store fused with itself under any weights is itself.
   const tiles::Store same = fuse({north.root(), north.root()}, dir / "same", {1, 3});
@@ -120,7 +113,7 @@ TEST(Fuse, BadInputIsRefused) {
   ingest::BuildOptions o;
   o.inputs = {data("sar/umbra_mount_yasur.tif")};
   o.kind = tiles::DatasetKind::Sar;
-  const fs::path sar = built_store("umbra", o).root(), dem = single("N42E001").root();
+  const fs::path sar = built_store("umbra", o).root(), dem = srtm_store("N42E001").root();
   auto expect_error = [&](pipeline::FuseOptions f, const std::string& needle) {
     auto r = pipeline::fuse_stores(f, ex, progress);
     ASSERT_FALSE(r);
@@ -144,11 +137,11 @@ TEST(Fuse, InputsOfVeryDifferentResolutionAreRefusedUnlessAllowed) {
   ingest::BuildOptions o;
   o.inputs = {data("srtm/N42E001.hgt.zip")};
   o.kind = tiles::DatasetKind::Elevation;
-  o.max_level = single("N41E001").manifest().max_level - 1;
+  o.max_level = srtm_store("N41E001").manifest().max_level - 1;
   const fs::path near = built_store("N42E001-one-coarser", o).root();
   o.max_level = *o.max_level - 3;
   const fs::path coarse = built_store("N42E001-four-coarser", o).root();
-  const fs::path fine = single("N41E001").root();
+  const fs::path fine = srtm_store("N41E001").root();
   pipeline::FuseOptions f{{near, coarse}, {}, pipeline::FuseMode::First, dir / "fused"};
   auto r = pipeline::fuse_stores(f, ex, progress);
   ASSERT_FALSE(r);

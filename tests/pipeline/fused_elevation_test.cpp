@@ -21,13 +21,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const tiles::Store& single(const std::string& tile) {
-  ingest::BuildOptions o;
-  o.inputs = {data("srtm/" + tile + ".hgt.zip")};
-  o.kind = tiles::DatasetKind::Elevation;
-  return built_store(tile, o);
-}
-
 Result<tiles::Store> draw_time(std::vector<tiles::Store> stores, pipeline::FuseMode mode,
                                std::vector<double> weights = {}) {
   std::vector<pipeline::ElevationLayer> layers;
@@ -47,7 +40,7 @@ bool same_samples(const tiles::Raster& a, const tiles::Raster& b) {
 // included) and every geometric error. The weights matter there: the coarse
 // tiles along 42N mix both layers' samples.
 TEST(FusedElevation, WeightedMeanEqualsTheStoreOfReliefFuseWeights) {
-  const tiles::Store &n41 = single("N41E001"), &n42 = single("N42E001");
+  const tiles::Store &n41 = srtm_store("N41E001"), &n42 = srtm_store("N42E001");
   ScratchDir dir("fused_weights");
   ThreadExecutor ex(2);
   NullProgress progress;
@@ -78,7 +71,7 @@ TEST(FusedElevation, WeightedMeanEqualsTheStoreOfReliefFuseWeights) {
 }
 
 TEST(FusedElevation, BadWeightsAreOneLineErrors) {
-  const tiles::Store &n41 = single("N41E001"), &n42 = single("N42E001");
+  const tiles::Store &n41 = srtm_store("N41E001"), &n42 = srtm_store("N42E001");
   const std::pair<std::vector<double>, std::string> cases[] = {
       {{1}, "--weights: 1 weights for 2 elevation layers"},
       {{1, 2, 3}, "--weights: 3 weights for 2 elevation layers"},
@@ -130,7 +123,7 @@ TEST(FusedElevation, OpeningReadsEachLayerTileOnce) {
   coarse.inputs = {data("srtm/N41E001.hgt.zip"), data("srtm/N42E001.hgt.zip")};
   coarse.kind = tiles::DatasetKind::Elevation;
   coarse.max_level = 7;
-  const fs::path n41 = single("N41E001").root(), n42 = single("N42E001").root(),
+  const fs::path n41 = srtm_store("N41E001").root(), n42 = srtm_store("N42E001").root(),
                  pair7 = built_store("pair-level7", coarse).root();
   for (const auto& [first, fine] : {std::pair{n41, n42}, std::pair{pair7, n42}}) {
     auto a = std::make_shared<CountingSource>(first);

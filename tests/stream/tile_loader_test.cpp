@@ -448,13 +448,13 @@ std::vector<int> nice_of_threads(const std::string& name) {
   return out;
 }
 
-// The workers run below the render thread's priority (they would otherwise
-// take the cores llvmpipe and the render thread need); the loader returns
-// only once they all do. With worker_nice 0, at the creator's priority.
+// With worker_nice the workers run below the render thread's priority; the
+// loader returns only once they all do. With worker_nice 0 (the default),
+// at the creator's priority.
 TEST_F(TileLoaderTest, WorkersRunAtALowerPriorityThanTheThreadThatCreatesThem) {
   open(0ms);
   const int own = getpriority(PRIO_PROCESS, gettid());
-  loader({.max_in_flight = 3});
+  loader({.max_in_flight = 3, .worker_nice = 10});
   std::vector<int> nice = nice_of_threads("relief-loader");
   ASSERT_EQ(nice.size(), 3u);
   for (int n : nice) EXPECT_EQ(n, std::min(19, own + 10));
@@ -462,7 +462,7 @@ TEST_F(TileLoaderTest, WorkersRunAtALowerPriorityThanTheThreadThatCreatesThem) {
   loader_.reset();  // joins its workers
   EXPECT_TRUE(nice_of_threads("relief-loader").empty());
   source_->render_thread_may_fetch = true;  // level 0 again
-  loader({.max_in_flight = 2, .worker_nice = 0});
+  loader({.max_in_flight = 2});
   nice = nice_of_threads("relief-loader");
   ASSERT_EQ(nice.size(), 2u);
   for (int n : nice) EXPECT_EQ(n, own);

@@ -21,6 +21,16 @@ std::string data(const std::string& relative) {
   return (data_dir() / relative).string();
 }
 
+size_t regular_files_under(const fs::path& dir) {
+  std::error_code ec;
+  size_t n = 0;
+  for (auto it = fs::recursive_directory_iterator(dir, ec);
+       !ec && it != fs::recursive_directory_iterator(); it.increment(ec)) {
+    n += it->is_regular_file() ? 1 : 0;
+  }
+  return n;
+}
+
 ScratchDir::ScratchDir(const std::string& name) {
   path_ = fs::temp_directory_path() / ("relief_test_" + name + "_" + std::to_string(::getpid()));
   fs::remove_all(path_);

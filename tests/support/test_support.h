@@ -12,6 +12,9 @@ namespace relief::testing {
 std::filesystem::path data_dir();  // the repository's data/
 std::string data(const std::string& relative);
 
+// Regular files anywhere below `dir` (0 when it does not exist).
+size_t regular_files_under(const std::filesystem::path& dir);
+
 // A fresh directory under the system temp dir, removed by the destructor.
 class ScratchDir {
  public:

@@ -5,10 +5,9 @@
 //
 // Threads: the render thread calls everything here; worker threads (as many
 // as loads may be in flight) read and decode tiles. Event listeners run on
-// the render thread, in begin_frame(). The workers run at a lower CPU
-// priority (LoaderOptions::worker_nice) and are named "relief-loader": on a
-// machine with few cores (llvmpipe rasterising on the same cores) they take
-// what the render thread and the rasteriser leave, not an equal share.
+// the render thread, in begin_frame(). The workers are named
+// "relief-loader" and may run at a lower CPU priority
+// (LoaderOptions::worker_nice; off by default, the option says why).
 //
 // Priority: each frame's requests (from selection, with view priorities)
 // replace the previous frame's queue; queued tiles no frame wants any more are
@@ -48,11 +47,14 @@ struct LoaderOptions {
   // What the retry pauses are measured on (tests pass a ManualClock); must
   // outlive the loader.
   const Clock* clock = &steady_clock();
-  // Added to the workers' nice value (Linux: per thread; capped at 19):
-  // eight decoding workers at the render thread's priority would take most
-  // of two cores from it and llvmpipe's rasteriser threads. 0: the same
-  // priority as the thread that creates the loader.
-  int worker_nice = 10;
+  // Added to the workers' nice value (Linux: per thread; capped at 19).
+  // 0, the default: the priority of the thread that creates the loader.
+  // 10 gave steadier frames under load on 2 cores (the workers take what
+  // the render thread and llvmpipe leave), but a render loop that keeps the
+  // cores busy while the view is incomplete then starves the loads: under
+  // ASan `relief view` did not complete a still view in 30 s. Not the
+  // default until the viewer idles while it waits (docs/streaming.md).
+  int worker_nice = 0;
 };
 
 struct LevelUse {
