@@ -12,9 +12,9 @@ namespace relief::ingest {
 namespace {
 namespace fs = std::filesystem;
 using geo::TileKey;
+using testing::regular_files_under;
 using tiles::Raster;
 using tiles::SampleType;
-using testing::regular_files_under;
 
 constexpr int kW = 16, kH = 8;
 const tiles::TileShape kShape{SampleType::Float32, 1, kW, kH, 0};
