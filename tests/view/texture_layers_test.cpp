@@ -80,6 +80,19 @@ class TextureLayersTest : public GlSceneTest {
     EXPECT_TRUE(pixels) << pixels.error().message;
     return pixels ? *pixels : std::vector<uint8_t>{};
   }
+
+  // Interactive frames until one is complete (every layer tile resident and
+  // processed; tiles load on the loaders' threads meanwhile), at most 200.
+  bool draw_until_complete(Scene& s) {
+    for (int frame = 0; frame < 200; ++frame) {
+      auto f = s.draw(kDown, *target_);
+      EXPECT_TRUE(f) << f.error().message;
+      if (!f) return false;
+      if (f->complete) return true;
+      std::this_thread::sleep_for(5ms);
+    }
+    return false;
+  }
 };
 
 TEST_F(TextureLayersTest, AParameterChangeLeavesNoStaleTileInTheNextFrame) {
@@ -88,15 +101,7 @@ TEST_F(TextureLayersTest, AParameterChangeLeavesNoStaleTileInTheNextFrame) {
   // changes every sample.
   auto s = scene({layer(chain_of("lee", {"radius=3"}, {"sigmas=3"}))}, true);
   ASSERT_TRUE(s);
-  // Interactive frames until complete: every layer tile resident and processed.
-  bool complete = false;
-  for (int frame = 0; frame < 200 && !complete; ++frame) {
-    auto f = s->draw(kDown, *target_);
-    ASSERT_TRUE(f) << f.error().message;
-    complete = f->complete;
-    if (!complete) std::this_thread::sleep_for(5ms);
-  }
-  ASSERT_TRUE(complete);
+  ASSERT_TRUE(draw_until_complete(*s));
   const std::vector<uint8_t> before = *target_->read_rgba();
   auto again = s->draw(kDown, *target_);
   ASSERT_TRUE(again);
@@ -182,14 +187,7 @@ TEST_F(TextureLayersTest, OnTheCpuAChangeThatFitsTheBudgetIsCompleteInTheNextFra
       {layer(chain_of("lee", {"radius=3"}, {"sigmas=3"}), 1, gpuprocess::ColorMap::grey, cpu)},
       true);
   ASSERT_TRUE(s);
-  bool complete = false;
-  for (int frame = 0; frame < 200 && !complete; ++frame) {
-    auto f = s->draw(kDown, *target_);
-    ASSERT_TRUE(f) << f.error().message;
-    complete = f->complete;
-    if (!complete) std::this_thread::sleep_for(5ms);  // tiles load
-  }
-  ASSERT_TRUE(complete);
+  ASSERT_TRUE(draw_until_complete(*s));
   const auto changed = chain_of("lee", {"radius=3"}, {"sigmas=1.5"});
   ASSERT_TRUE(s->set_texture_layers({layer(changed, 1, gpuprocess::ColorMap::grey, cpu)}));
   auto next = s->draw(kDown, *target_);
