@@ -14,6 +14,7 @@
 
 #include <fmt/format.h>
 
+#include "angle_bound_range.h"
 #include "diamond_errors.h"
 #include "edge_marks.h"
 #include "mark_blocks.h"
@@ -853,7 +854,13 @@ class Refiner {
   // The split criterion's value for the part of diamond d inside quad q: the
   // screen bound of its error in a box around it and its descendants (nested
   // in its parents' boxes, so the value never grows from parent to child).
-  double pixels(int q, GridPoint p, const Diamond& d, Criterion* out = nullptr) {
+  //
+  // Without `out` and unless `exact`, the value returned is only on the same
+  // side of the threshold as the criterion's (the mesh depends on nothing
+  // else): bounds from the ball's centre settle most diamonds
+  // (angle_bound_range.h), the exact bound the others.
+  double pixels(int q, GridPoint p, const Diamond& d, Criterion* out = nullptr,
+                bool exact = false) {
     const Quad& quad = quads_[static_cast<size_t>(q)];
     const int32_t n = grid_.n();
     double error = 0, lo = 0, hi = 0;
@@ -907,6 +914,22 @@ class Refiner {
       }
     }
     const Box box{c - Vec3{radius, radius, radius}, c + Vec3{radius, radius, radius}};
+    if (!out && !exact) {
+      // The criterion is min(distance bound, angle bound), or the distance
+      // bound alone when a corner is behind the eye (vertical_error_parts).
+      const double distance = distance_to(box, view_.eye);
+      const double by_distance =
+          distance > 0 ? view_.pixels_per_radian * metres * (1 + corner_) / distance : INFINITY;
+      // (Compared with margins: the exact one may round otherwise.)
+      if (by_distance <= o_.pixel_error * (1 - kSafety)) return by_distance;
+      const Vec3 up{cos_lat * cos_lon, cos_lat * sin_lon, sin_lat};
+      const AngleBoundRange a =
+          angle_bound_range(view_, c, radius, up, 2 * r * quad.cell * kDegree, metres);
+      if (a.in_front && a.hi <= o_.pixel_error) return a.hi;
+      if (a.in_front && a.lo > o_.pixel_error && by_distance > o_.pixel_error * (1 + kSafety)) {
+        return std::min(by_distance, a.lo);
+      }
+    }
     const VerticalErrorParts e = vertical_error_parts(view_, box, area, metres);
     if (out) {
       *out = {e.pixels, metres, false, near, length(c - view_.eye) + std::sqrt(3.0) * radius, e};
@@ -1033,9 +1056,12 @@ class Refiner {
     if (!MarkGrid::splittable(d)) return;
     ++stats_.marks_evaluated;
     const std::optional<Located> other = mirror(q, p);
+    // The criterion's parts only where record() keeps them.
     Criterion own, across;
-    Criterion* want = history_ ? &own : nullptr;
-    double px = pixels(q, p, d, want);
+    auto recorded = [&](int quad, Criterion& c) {
+      return history_ && quads_[static_cast<size_t>(quad)].recording ? &c : nullptr;
+    };
+    double px = pixels(q, p, d, recorded(q, own));
     bool stuck = blocked(q, p, d);
     // The half across a side shared with a finer quad may be a sample's
     // side there (the finer quad's mark is blocked then): that half is the
@@ -1043,8 +1069,14 @@ class Refiner {
     const bool halves = other && MarkGrid::splittable(grid_.diamond(other->p));
     if (halves) {
       const Diamond od = grid_.diamond(other->p);
-      px = std::max(px, pixels(other->quad, other->p, od, history_ ? &across : nullptr));
+      px = std::max(px, pixels(other->quad, other->p, od, recorded(other->quad, across)));
       stuck |= blocked(other->quad, other->p, od);
+    }
+    if (px > o_.pixel_error && stuck) {  // the statistics want the value itself
+      px = pixels(q, p, d, nullptr, true);
+      if (halves) {
+        px = std::max(px, pixels(other->quad, other->p, grid_.diamond(other->p), nullptr, true));
+      }
     }
     if (history_) {
       record(q, p, own, stuck);
