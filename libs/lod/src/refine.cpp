@@ -303,7 +303,7 @@ struct Located {
 class Refiner {
  public:
   Refiner(const View& view, TerrainModel& terrain, const Selection& selection,
-          const RefineOptions& options, RefineCache::Impl& cache, MarkBlocks& marks)
+          const RefineOptions& options, RefineCache::Impl& cache, SlotMarks& marks)
       : view_(view),
         terrain_(terrain),
         selection_(selection),
@@ -643,7 +643,9 @@ class Refiner {
     }
   }
 
-  uint8_t& mark(int q, GridPoint p) { return marks_.at(q, p); }
+  // The mark of a diamond (MarkGrid::splittable, or a root).
+  uint8_t& mark(int q, GridPoint p) { return marks_.at(q, grid_.slot(p)); }
+  uint8_t mark_of(int q, GridPoint p) const { return marks_.get(q, grid_.slot(p)); }
 
   Status prepare(int index, const SelectedQuad& s, Quad& q) {
     const int32_t n = grid_.n();
@@ -681,9 +683,7 @@ class Refiner {
     if (const DataWindow w = terrain_.window(s.key); w.tile) {
       q.errors = RELIEF_TRY(cache_.get(terrain_, grid_, *w.tile, stats_));
     }
-    for (int32_t x : {0, n, 2 * n}) {  // the halves' corners and centres
-      mark(index, {x, 0}) = mark(index, {x, n}) = kSplit;
-    }
+    // The halves' centres (their corners are vertices: no marks).
     mark(index, {n / 2, n / 2}) = mark(index, {3 * n / 2, n / 2}) = kSplit;
     return prepare_edges(s, q);
   }
@@ -795,16 +795,21 @@ class Refiner {
     while (!stack_.empty()) {
       const Located l = stack_.back();
       stack_.pop_back();
+      const Diamond d = grid_.diamond(l.p);
+      if (d.kind == MarkKind::kVertex) continue;  // a half's corner: always a vertex
+      assert(MarkGrid::splittable(d) && !blocked(l.quad, l.p, d));
       uint8_t& m = mark(l.quad, l.p);
       if (m == kSplit) continue;
       m = kSplit;
-      const Diamond d = grid_.diamond(l.p);
-      assert(MarkGrid::splittable(d) && !blocked(l.quad, l.p, d));
-      if (top_down_) {
+      // The children of a diagonal of h are axis diamonds of s = h, those
+      // of an axis diamond of s diagonals of h = s / 2 (always splittable).
+      if (top_down_ && (d.kind != MarkKind::kDiagonal || d.size >= 2)) {
+        const DiamondErrors* errors = quads_[static_cast<size_t>(l.quad)].errors.get();
         for (const GridPoint& c : d.children(l.p)) {
-          if (grid_.inside(c) && MarkGrid::splittable(grid_.diamond(c))) {
-            work_.push_back({l.quad, c});
-          }
+          if (!grid_.inside(c)) continue;
+          work_.push_back({l.quad, c});
+          // Read when the child is decided: fetched meanwhile.
+          if (errors) __builtin_prefetch(&errors->at[grid_.slot(c)]);
         }
       }
       if (const auto other = mirror(l.quad, l.p)) stack_.push_back(*other);
@@ -859,13 +864,13 @@ class Refiner {
   // side of the threshold as the criterion's (the mesh depends on nothing
   // else): bounds from the ball's centre settle most diamonds
   // (angle_bound_range.h), the exact bound the others.
-  double pixels(int q, GridPoint p, const Diamond& d, Criterion* out = nullptr,
+  double pixels(int q, GridPoint p, uint32_t slot, const Diamond& d, Criterion* out = nullptr,
                 bool exact = false) {
     const Quad& quad = quads_[static_cast<size_t>(q)];
     const int32_t n = grid_.n();
     double error = 0, lo = 0, hi = 0;
     if (quad.errors) {
-      const DiamondError& e = quad.errors->at[grid_.slot(p)];
+      const DiamondError& e = quad.errors->at[slot];
       error = e.error;
       lo = e.lo;
       hi = e.hi;
@@ -1050,10 +1055,11 @@ class Refiner {
   // Evaluates the split criterion of an undecided mark (for both quads when
   // it lies on their shared side) and splits it or keeps it.
   void decide(int q, GridPoint p) {
-    uint8_t& m = mark(q, p);
-    if (m != kUnknown) return;
     const Diamond d = grid_.diamond(p);
     if (!MarkGrid::splittable(d)) return;
+    const uint32_t slot = grid_.slot(p);
+    uint8_t& m = marks_.at(q, slot);
+    if (m != kUnknown) return;
     ++stats_.marks_evaluated;
     const std::optional<Located> other = mirror(q, p);
     // The criterion's parts only where record() keeps them.
@@ -1061,21 +1067,23 @@ class Refiner {
     auto recorded = [&](int quad, Criterion& c) {
       return history_ && quads_[static_cast<size_t>(quad)].recording ? &c : nullptr;
     };
-    double px = pixels(q, p, d, recorded(q, own));
+    double px = pixels(q, p, slot, d, recorded(q, own));
     bool stuck = blocked(q, p, d);
     // The half across a side shared with a finer quad may be a sample's
     // side there (the finer quad's mark is blocked then): that half is the
     // coarser quad's full mesh already, nothing to split.
-    const bool halves = other && MarkGrid::splittable(grid_.diamond(other->p));
+    const Diamond od = other ? grid_.diamond(other->p) : Diamond{};
+    const bool halves = other && MarkGrid::splittable(od);
+    const uint32_t other_slot = halves ? grid_.slot(other->p) : 0;
     if (halves) {
-      const Diamond od = grid_.diamond(other->p);
-      px = std::max(px, pixels(other->quad, other->p, od, recorded(other->quad, across)));
+      px = std::max(px,
+                    pixels(other->quad, other->p, other_slot, od, recorded(other->quad, across)));
       stuck |= blocked(other->quad, other->p, od);
     }
     if (px > o_.pixel_error && stuck) {  // the statistics want the value itself
-      px = pixels(q, p, d, nullptr, true);
+      px = pixels(q, p, slot, d, nullptr, true);
       if (halves) {
-        px = std::max(px, pixels(other->quad, other->p, grid_.diamond(other->p), nullptr, true));
+        px = std::max(px, pixels(other->quad, other->p, other_slot, od, nullptr, true));
       }
     }
     if (history_) {
@@ -1093,13 +1101,18 @@ class Refiner {
       if (other) want_split_across(other->quad, other->p, grid_.diamond(other->p));
     }
     m = kKept;
-    if (other && marks_.get(other->quad, other->p) == kUnknown) mark(other->quad, other->p) = kKept;
+    // (A sample's side across, never split, has no mark.)
+    if (halves && marks_.get(other->quad, other_slot) == kUnknown) {
+      marks_.at(other->quad, other_slot) = kKept;
+    }
   }
 
   // The triangle with right angle at r and hypotenuse (a, b), or its children.
   void emit(int q, GridPoint r, GridPoint a, GridPoint b, std::vector<uint32_t>& out) {
     const GridPoint m{(a.x + b.x) / 2, (a.y + b.y) / 2};
-    if (marks_.get(q, m) == kSplit && MarkGrid::splittable(grid_.diamond(m))) {
+    // A hypotenuse of two cells along an axis is a sample's side: never split.
+    const bool sample_side = std::abs(a.x - b.x) + std::abs(a.y - b.y) == 2;
+    if (!sample_side && mark_of(q, m) == kSplit) {
       emit(q, m, a, r, out);
       emit(q, m, r, b, out);
       return;
@@ -1115,7 +1128,7 @@ class Refiner {
   const Selection& selection_;
   const RefineOptions& o_;
   RefineCache::Impl& cache_;
-  MarkBlocks& marks_;
+  SlotMarks& marks_;
   MarkGrid grid_;
   int deepest_ = 0;
   int64_t globe_width_ = 0;
@@ -1148,7 +1161,7 @@ Result<RefinedMesh> refine(const View& view, TerrainModel& terrain, const Select
   RefineCache local(0);
   RefineCache& cache = options.cache ? *options.cache : local;
   // The marks' blocks stay with the thread for its next frame.
-  thread_local MarkBlocks marks;
+  thread_local SlotMarks marks;
   Refiner r(view, terrain, selection, options, cache.impl(), marks);
   RELIEF_CHECK(r.prepare());
   RefinedMesh mesh;
