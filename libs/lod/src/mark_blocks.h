@@ -94,6 +94,11 @@ class SlotMarks {
     return b[slot % kBlockBytes];
   }
 
+  // A mark about to be read (if its block is there).
+  void prefetch(int q, uint32_t slot) const {
+    if (const uint8_t* b = table_[block(q, slot)]) __builtin_prefetch(b + slot % kBlockBytes);
+  }
+
  private:
   static constexpr uint32_t kBlockBytes = 256, kChunkBlocks = 256;
 

@@ -795,12 +795,12 @@ class Refiner {
     while (!stack_.empty()) {
       const Located l = stack_.back();
       stack_.pop_back();
-      const Diamond d = grid_.diamond(l.p);
-      if (d.kind == MarkKind::kVertex) continue;  // a half's corner: always a vertex
-      assert(MarkGrid::splittable(d) && !blocked(l.quad, l.p, d));
+      if (grid_.is_corner(l.p)) continue;  // a half's corner: always a vertex
       uint8_t& m = mark(l.quad, l.p);
       if (m == kSplit) continue;
       m = kSplit;
+      const Diamond d = grid_.diamond(l.p);
+      assert(MarkGrid::splittable(d) && !blocked(l.quad, l.p, d));
       // The children of a diagonal of h are axis diamonds of s = h, those
       // of an axis diamond of s diagonals of h = s / 2 (always splittable).
       if (top_down_ && (d.kind != MarkKind::kDiagonal || d.size >= 2)) {
@@ -809,7 +809,9 @@ class Refiner {
           if (!grid_.inside(c)) continue;
           work_.push_back({l.quad, c});
           // Read when the child is decided: fetched meanwhile.
-          if (errors) __builtin_prefetch(&errors->at[grid_.slot(c)]);
+          const uint32_t slot = grid_.slot(c);
+          marks_.prefetch(l.quad, slot);
+          if (errors) __builtin_prefetch(&errors->at[slot]);
         }
       }
       if (const auto other = mirror(l.quad, l.p)) stack_.push_back(*other);
@@ -1062,8 +1064,9 @@ class Refiner {
     if (m != kUnknown) return;
     ++stats_.marks_evaluated;
     const std::optional<Located> other = mirror(q, p);
-    // The criterion's parts only where record() keeps them.
-    Criterion own, across;
+    // The criterion's parts only where record() keeps them (in members:
+    // zeroing two of them per call took a quarter of this function).
+    Criterion &own = own_, &across = across_;
     auto recorded = [&](int quad, Criterion& c) {
       return history_ && quads_[static_cast<size_t>(quad)].recording ? &c : nullptr;
     };
@@ -1140,7 +1143,8 @@ class Refiner {
   RefineHistory::Impl* history_;
   double corner_;  // tan^2 of the screen's corner
   bool reuse_all_ = false;
-  int block_shift_ = 0;  // blocks of 2^block_shift_ x 2^block_shift_ cells
+  Criterion own_, across_;  // decide()'s
+  int block_shift_ = 0;     // blocks of 2^block_shift_ x 2^block_shift_ cells
   int32_t block_columns_ = 0, block_rows_ = 0;
 };
 
