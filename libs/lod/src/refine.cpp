@@ -395,8 +395,11 @@ class Refiner {
     }
   }
 
-  RefinedMesh mesh() {
+  // `expected`: about as many indices as the last frame's (growing the
+  // buffer took a few percent of a frame in copies and page faults).
+  RefinedMesh mesh(size_t expected) {
     RefinedMesh out;
+    out.indices.reserve(expected + expected / 8);
     out.grid_k = grid_.k();
     out.quads.resize(quads_.size());
     const int32_t n = grid_.n();
@@ -1166,6 +1169,7 @@ Result<RefinedMesh> refine(const View& view, TerrainModel& terrain, const Select
   RefineCache& cache = options.cache ? *options.cache : local;
   // The marks' blocks stay with the thread for its next frame.
   thread_local SlotMarks marks;
+  thread_local size_t last_indices = 0;
   Refiner r(view, terrain, selection, options, cache.impl(), marks);
   RELIEF_CHECK(r.prepare());
   RefinedMesh mesh;
@@ -1177,7 +1181,8 @@ Result<RefinedMesh> refine(const View& view, TerrainModel& terrain, const Select
     } else {
       r.bottom_up();
     }
-    mesh = r.mesh();
+    mesh = r.mesh(last_indices);
+    last_indices = mesh.indices.size();
   }
   r.save_history(mesh);
   mesh.stats.seconds =
