@@ -865,10 +865,10 @@ class Refiner {
   // screen bound of its error in a box around it and its descendants (nested
   // in its parents' boxes, so the value never grows from parent to child).
   //
-  // Without `out` and unless `exact`, the value returned is only on the same
-  // side of the threshold as the criterion's (the mesh depends on nothing
-  // else): bounds from the ball's centre settle most diamonds
-  // (angle_bound_range.h), the exact bound the others.
+  // Unless `exact`, the value returned is only on the same side of the
+  // threshold as the criterion's (the mesh depends on nothing else): bounds
+  // from the ball's centre settle most diamonds (angle_bound_range.h), the
+  // exact bound the others. With `out`, only the distance bound's shortcut.
   double pixels(int q, GridPoint p, uint32_t slot, const Diamond& d, Criterion* out = nullptr,
                 bool exact = false) {
     const Quad& quad = quads_[static_cast<size_t>(q)];
@@ -924,26 +924,41 @@ class Refiner {
       }
     }
     const Box box{c - Vec3{radius, radius, radius}, c + Vec3{radius, radius, radius}};
-    if (!out && !exact) {
+    const double far = length(c - view_.eye) + std::sqrt(3.0) * radius;
+    if (!exact) {
       // The criterion is min(distance bound, angle bound), or the distance
       // bound alone when a corner is behind the eye (vertical_error_parts).
+      const double t = o_.pixel_error;
       const double distance = distance_to(box, view_.eye);
       const double by_distance =
           distance > 0 ? view_.pixels_per_radian * metres * (1 + corner_) / distance : INFINITY;
-      // (Compared with margins: the exact one may round otherwise.)
-      if (by_distance <= o_.pixel_error * (1 - kSafety)) return by_distance;
-      const Vec3 up{cos_lat * cos_lon, cos_lat * sin_lon, sin_lat};
-      const AngleBoundRange a =
-          angle_bound_range(view_, c, radius, up, 2 * r * quad.cell * kDegree, metres);
-      if (a.in_front && a.hi <= o_.pixel_error) return a.hi;
-      if (a.in_front && a.lo > o_.pixel_error && by_distance > o_.pixel_error * (1 + kSafety)) {
-        return std::min(by_distance, a.lo);
+      VerticalErrorParts parts;
+      parts.distance = distance;
+      parts.distance_bound = by_distance;
+      // Compared with margins: the exact bound may round otherwise. A
+      // recorded decision kept by the distance bound needs it under its
+      // block's keep_below (margin() then takes the distance alone).
+      const double keep = out ? quad.blocks[block_of(p)].keep_below : t;
+      if (by_distance <= std::min(t, keep) * (1 - kSafety)) {
+        parts.pixels = by_distance;
+        if (out) *out = {by_distance, metres, false, near, far, parts};
+        return by_distance;
+      }
+      // A recorded decision takes its margins from the exact terms: margins
+      // from the bounds' (valid too) were short more often, and a slow
+      // camera reused fewer blocks.
+      if (!out) {
+        const Vec3 up{cos_lat * cos_lon, cos_lat * sin_lon, sin_lat};
+        const AngleBoundRange a =
+            angle_bound_range(view_, c, radius, up, 2 * r * quad.cell * kDegree, metres);
+        if (a.in_front && a.hi <= t) return a.hi;
+        if (a.in_front && a.lo > t && by_distance > t * (1 + kSafety)) {
+          return std::min(by_distance, a.lo);
+        }
       }
     }
     const VerticalErrorParts e = vertical_error_parts(view_, box, area, metres);
-    if (out) {
-      *out = {e.pixels, metres, false, near, length(c - view_.eye) + std::sqrt(3.0) * radius, e};
-    }
+    if (out) *out = {e.pixels, metres, false, near, far, e};
     return e.pixels;
   }
 
