@@ -1,6 +1,6 @@
 // How refinement stores what it keeps per diamond and per grid point:
 // diamond slots (MarkGrid::slot, class by class) and edge marks in blocks
-// allocated on first write (MarkBlocks).
+// allocated on first write (MarkBlocks, and SlotMarks by diamond slot).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -50,6 +50,30 @@ TEST(MarkBlocks, MarksPerQuadAndPointUndecidedAfterReset) {
     EXPECT_EQ(marks.get(2, {3, 5}), 0);
     EXPECT_EQ(marks.get(2, {14, grid.n()}), 1);
     EXPECT_EQ(marks.get(2, {15, grid.n()}), 0);
+  }
+}
+
+// The marks refinement uses, by diamond slot: the same contract.
+TEST(SlotMarks, MarksPerQuadAndSlotUndecidedAfterReset) {
+  const MarkGrid grid(5);
+  SlotMarks marks;
+  for (int frame = 0; frame < 2; ++frame) {
+    marks.reset(grid, 3);
+    for (int q = 0; q < 3; ++q) {
+      for (uint32_t slot = 0; slot < grid.slots(); ++slot) {
+        ASSERT_EQ(marks.get(q, slot), 0) << frame << " " << q << " " << slot;
+      }
+    }
+    uint8_t& first = marks.at(1, 3);
+    first = 2;
+    for (uint32_t slot = 0; slot < grid.slots(); slot += 7) marks.at(2, slot) = 1;
+    EXPECT_EQ(first, 2);  // still valid after more blocks were allocated
+    EXPECT_EQ(marks.get(1, 3), 2);
+    EXPECT_EQ(marks.get(0, 3), 0);
+    EXPECT_EQ(marks.get(2, 3), 0);
+    EXPECT_EQ(marks.get(2, 14), 1);
+    EXPECT_EQ(marks.get(2, grid.slots() - 1), (grid.slots() - 1) % 7 == 0 ? 1 : 0);
+    marks.prefetch(0, grid.slots() - 1);  // harmless on a block not there
   }
 }
 

@@ -22,7 +22,10 @@
 // axis diamonds of s = 1 (a sample's side) are never split, so the finest
 // triangulation is the full mesh of the level: every sample cell cut by its
 // two diagonals.
+#include <algorithm>
 #include <array>
+#include <bit>
+#include <cassert>
 #include <cstdint>
 
 namespace relief::lod {
@@ -57,6 +60,8 @@ class MarkGrid {
   uint32_t count() const { return static_cast<uint32_t>(columns()) * rows(); }
   uint32_t id(GridPoint p) const { return static_cast<uint32_t>(p.y * columns() + p.x); }
   bool inside(GridPoint p) const { return p.x >= 0 && p.x <= 2 * n_ && p.y >= 0 && p.y <= n_; }
+  // A corner of a half (x = 0, n, 2n; y = 0, n), inside the grid: the only vertices.
+  bool is_corner(GridPoint p) const { return ((p.x | p.y) & (n_ - 1)) == 0; }
   // Side bits (mesh_topology.h) of the quad sides the point lies on.
   uint8_t sides(GridPoint p) const;
 
@@ -105,5 +110,55 @@ class MarkGrid {
   int32_t n_;
   std::array<uint32_t, 64> offsets_{};  // the first slot of each class
 };
+
+// Inline: refinement calls both several times per diamond.
+inline Diamond MarkGrid::diamond(GridPoint c) const {
+  Diamond d;
+  const int32_t bx = lowbit(c.x), by = lowbit(c.y);
+  if (bx >= n_ && by >= n_) return d;  // a corner of a half: a vertex
+  if (bx == by) {
+    const int32_t h = bx;
+    d.kind = MarkKind::kDiagonal;
+    d.size = h;
+    const GridPoint lo{c.x - h, c.y - h}, hi{c.x + h, c.y + h};
+    const GridPoint a{c.x + h, c.y - h}, b{c.x - h, c.y + h};
+    if (((lo.x + lo.y) / (2 * h)) % 2 == 0) {
+      d.ends = {lo, hi};
+      d.apexes = {a, b};
+    } else {
+      d.ends = {a, b};
+      d.apexes = {lo, hi};
+    }
+    return d;
+  }
+  const int32_t s = std::min(bx, by);
+  d.size = s;
+  if (bx < by) {
+    d.kind = MarkKind::kAxisX;
+    d.ends = {GridPoint{c.x - s, c.y}, GridPoint{c.x + s, c.y}};
+    d.apexes = {GridPoint{c.x, c.y - s}, GridPoint{c.x, c.y + s}};
+  } else {
+    d.kind = MarkKind::kAxisY;
+    d.ends = {GridPoint{c.x, c.y - s}, GridPoint{c.x, c.y + s}};
+    d.apexes = {GridPoint{c.x - s, c.y}, GridPoint{c.x + s, c.y}};
+  }
+  return d;
+}
+
+inline uint32_t MarkGrid::slot(GridPoint c) const {
+  const int32_t bx = lowbit(c.x), by = lowbit(c.y);
+  const uint32_t n = static_cast<uint32_t>(n_);
+  const uint32_t x = static_cast<uint32_t>(c.x), y = static_cast<uint32_t>(c.y);
+  if (bx == by) {  // a diagonal: both coordinates odd multiples of h
+    const int j = std::countr_zero(static_cast<uint32_t>(bx));
+    return offsets_[static_cast<size_t>(2 * j)] + (y >> (j + 1)) * (n >> j) + (x >> (j + 1));
+  }
+  const int32_t s = std::min(bx, by);
+  const int j = std::countr_zero(static_cast<uint32_t>(s));
+  assert(j >= 1 && "a sample's side: never split, no slot");
+  const uint32_t first = offsets_[static_cast<size_t>(2 * j - 1)];
+  if (bx < by) return first + (y >> (j + 1)) * (n >> j) + (x >> (j + 1));  // horizontal
+  return first + ((n >> (j + 1)) + 1) * (n >> j) + (y >> (j + 1)) * ((n >> j) + 1) + (x >> (j + 1));
+}
 
 }  // namespace relief::lod

@@ -67,4 +67,58 @@ class MarkBlocks {
   uint32_t used_ = 0;
 };
 
+// The same marks by diamond slot (MarkGrid::slot: class by class, row by row
+// within a class), in blocks of 256 slots: what refinement uses. Top-down, a
+// frame reaches the coarse diamonds of every quad and the fine ones of a few:
+// by grid point, each coarse mark took a 16 x 16 block of its own (a few
+// dozen megabytes of blocks touched per frame, most of them missing the
+// caches); by slot, a class's marks lie together. Only diamonds have slots:
+// the halves' corners (always vertices) and samples' sides (never split) have
+// no mark.
+class SlotMarks {
+ public:
+  void reset(const MarkGrid& grid, size_t quads) {
+    per_quad_ = (grid.slots() + kBlockBytes - 1) / kBlockBytes;
+    table_.assign(quads * per_quad_, nullptr);
+    used_ = 0;
+  }
+
+  uint8_t get(int q, uint32_t slot) const {
+    const uint8_t* b = table_[block(q, slot)];
+    return b ? b[slot % kBlockBytes] : uint8_t{0};
+  }
+
+  uint8_t& at(int q, uint32_t slot) {
+    uint8_t*& b = table_[block(q, slot)];
+    if (!b) b = allocate();
+    return b[slot % kBlockBytes];
+  }
+
+  // A mark about to be read (if its block is there).
+  void prefetch(int q, uint32_t slot) const {
+    if (const uint8_t* b = table_[block(q, slot)]) __builtin_prefetch(b + slot % kBlockBytes);
+  }
+
+ private:
+  static constexpr uint32_t kBlockBytes = 256, kChunkBlocks = 256;
+
+  size_t block(int q, uint32_t slot) const {
+    return static_cast<size_t>(q) * per_quad_ + slot / kBlockBytes;
+  }
+  uint8_t* allocate() {
+    const uint32_t b = used_++;
+    if (b / kChunkBlocks == chunks_.size()) {
+      chunks_.push_back(std::make_unique_for_overwrite<uint8_t[]>(kChunkBlocks * kBlockBytes));
+    }
+    uint8_t* block = chunks_[b / kChunkBlocks].get() + (b % kChunkBlocks) * kBlockBytes;
+    std::fill_n(block, kBlockBytes, uint8_t{0});
+    return block;
+  }
+
+  size_t per_quad_ = 0;
+  std::vector<uint8_t*> table_;  // per quad and block: the block, or null
+  std::vector<std::unique_ptr<uint8_t[]>> chunks_;
+  uint32_t used_ = 0;
+};
+
 }  // namespace relief::lod

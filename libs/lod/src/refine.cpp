@@ -14,6 +14,7 @@
 
 #include <fmt/format.h>
 
+#include "angle_bound_range.h"
 #include "diamond_errors.h"
 #include "edge_marks.h"
 #include "mark_blocks.h"
@@ -302,7 +303,7 @@ struct Located {
 class Refiner {
  public:
   Refiner(const View& view, TerrainModel& terrain, const Selection& selection,
-          const RefineOptions& options, RefineCache::Impl& cache, MarkBlocks& marks)
+          const RefineOptions& options, RefineCache::Impl& cache, SlotMarks& marks)
       : view_(view),
         terrain_(terrain),
         selection_(selection),
@@ -394,8 +395,11 @@ class Refiner {
     }
   }
 
-  RefinedMesh mesh() {
+  // `expected`: about as many indices as the last frame's (growing the
+  // buffer took a few percent of a frame in copies and page faults).
+  RefinedMesh mesh(size_t expected) {
     RefinedMesh out;
+    out.indices.reserve(expected + expected / 8);
     out.grid_k = grid_.k();
     out.quads.resize(quads_.size());
     const int32_t n = grid_.n();
@@ -642,7 +646,9 @@ class Refiner {
     }
   }
 
-  uint8_t& mark(int q, GridPoint p) { return marks_.at(q, p); }
+  // The mark of a diamond (MarkGrid::splittable, or a root).
+  uint8_t& mark(int q, GridPoint p) { return marks_.at(q, grid_.slot(p)); }
+  uint8_t mark_of(int q, GridPoint p) const { return marks_.get(q, grid_.slot(p)); }
 
   Status prepare(int index, const SelectedQuad& s, Quad& q) {
     const int32_t n = grid_.n();
@@ -680,9 +686,7 @@ class Refiner {
     if (const DataWindow w = terrain_.window(s.key); w.tile) {
       q.errors = RELIEF_TRY(cache_.get(terrain_, grid_, *w.tile, stats_));
     }
-    for (int32_t x : {0, n, 2 * n}) {  // the halves' corners and centres
-      mark(index, {x, 0}) = mark(index, {x, n}) = kSplit;
-    }
+    // The halves' centres (their corners are vertices: no marks).
     mark(index, {n / 2, n / 2}) = mark(index, {3 * n / 2, n / 2}) = kSplit;
     return prepare_edges(s, q);
   }
@@ -794,16 +798,23 @@ class Refiner {
     while (!stack_.empty()) {
       const Located l = stack_.back();
       stack_.pop_back();
+      if (grid_.is_corner(l.p)) continue;  // a half's corner: always a vertex
       uint8_t& m = mark(l.quad, l.p);
       if (m == kSplit) continue;
       m = kSplit;
       const Diamond d = grid_.diamond(l.p);
       assert(MarkGrid::splittable(d) && !blocked(l.quad, l.p, d));
-      if (top_down_) {
+      // The children of a diagonal of h are axis diamonds of s = h, those
+      // of an axis diamond of s diagonals of h = s / 2 (always splittable).
+      if (top_down_ && (d.kind != MarkKind::kDiagonal || d.size >= 2)) {
+        const DiamondErrors* errors = quads_[static_cast<size_t>(l.quad)].errors.get();
         for (const GridPoint& c : d.children(l.p)) {
-          if (grid_.inside(c) && MarkGrid::splittable(grid_.diamond(c))) {
-            work_.push_back({l.quad, c});
-          }
+          if (!grid_.inside(c)) continue;
+          work_.push_back({l.quad, c});
+          // Read when the child is decided: fetched meanwhile.
+          const uint32_t slot = grid_.slot(c);
+          marks_.prefetch(l.quad, slot);
+          if (errors) __builtin_prefetch(&errors->at[slot]);
         }
       }
       if (const auto other = mirror(l.quad, l.p)) stack_.push_back(*other);
@@ -853,12 +864,18 @@ class Refiner {
   // The split criterion's value for the part of diamond d inside quad q: the
   // screen bound of its error in a box around it and its descendants (nested
   // in its parents' boxes, so the value never grows from parent to child).
-  double pixels(int q, GridPoint p, const Diamond& d, Criterion* out = nullptr) {
+  //
+  // Unless `exact`, the value returned is only on the same side of the
+  // threshold as the criterion's (the mesh depends on nothing else): bounds
+  // from the ball's centre settle most diamonds (angle_bound_range.h), the
+  // exact bound the others. With `out`, only the distance bound's shortcut.
+  double pixels(int q, GridPoint p, uint32_t slot, const Diamond& d, Criterion* out = nullptr,
+                bool exact = false) {
     const Quad& quad = quads_[static_cast<size_t>(q)];
     const int32_t n = grid_.n();
     double error = 0, lo = 0, hi = 0;
     if (quad.errors) {
-      const DiamondError& e = quad.errors->at[grid_.slot(p)];
+      const DiamondError& e = quad.errors->at[slot];
       error = e.error;
       lo = e.lo;
       hi = e.hi;
@@ -907,10 +924,41 @@ class Refiner {
       }
     }
     const Box box{c - Vec3{radius, radius, radius}, c + Vec3{radius, radius, radius}};
-    const VerticalErrorParts e = vertical_error_parts(view_, box, area, metres);
-    if (out) {
-      *out = {e.pixels, metres, false, near, length(c - view_.eye) + std::sqrt(3.0) * radius, e};
+    const double far = length(c - view_.eye) + std::sqrt(3.0) * radius;
+    if (!exact) {
+      // The criterion is min(distance bound, angle bound), or the distance
+      // bound alone when a corner is behind the eye (vertical_error_parts).
+      const double t = o_.pixel_error;
+      const double distance = distance_to(box, view_.eye);
+      const double by_distance =
+          distance > 0 ? view_.pixels_per_radian * metres * (1 + corner_) / distance : INFINITY;
+      VerticalErrorParts parts;
+      parts.distance = distance;
+      parts.distance_bound = by_distance;
+      // Compared with margins: the exact bound may round otherwise. A
+      // recorded decision kept by the distance bound needs it under its
+      // block's keep_below (margin() then takes the distance alone).
+      const double keep = out ? quad.blocks[block_of(p)].keep_below : t;
+      if (by_distance <= std::min(t, keep) * (1 - kSafety)) {
+        parts.pixels = by_distance;
+        if (out) *out = {by_distance, metres, false, near, far, parts};
+        return by_distance;
+      }
+      // A recorded decision takes its margins from the exact terms: margins
+      // from the bounds' (valid too) were short more often, and a slow
+      // camera reused fewer blocks.
+      if (!out) {
+        const Vec3 up{cos_lat * cos_lon, cos_lat * sin_lon, sin_lat};
+        const AngleBoundRange a =
+            angle_bound_range(view_, c, radius, up, 2 * r * quad.cell * kDegree, metres);
+        if (a.in_front && a.hi <= t) return a.hi;
+        if (a.in_front && a.lo > t && by_distance > t * (1 + kSafety)) {
+          return std::min(by_distance, a.lo);
+        }
+      }
     }
+    const VerticalErrorParts e = vertical_error_parts(view_, box, area, metres);
+    if (out) *out = {e.pixels, metres, false, near, far, e};
     return e.pixels;
   }
 
@@ -1027,24 +1075,37 @@ class Refiner {
   // Evaluates the split criterion of an undecided mark (for both quads when
   // it lies on their shared side) and splits it or keeps it.
   void decide(int q, GridPoint p) {
-    uint8_t& m = mark(q, p);
-    if (m != kUnknown) return;
     const Diamond d = grid_.diamond(p);
     if (!MarkGrid::splittable(d)) return;
+    const uint32_t slot = grid_.slot(p);
+    uint8_t& m = marks_.at(q, slot);
+    if (m != kUnknown) return;
     ++stats_.marks_evaluated;
     const std::optional<Located> other = mirror(q, p);
-    Criterion own, across;
-    Criterion* want = history_ ? &own : nullptr;
-    double px = pixels(q, p, d, want);
+    // The criterion's parts only where record() keeps them (in members:
+    // zeroing two of them per call took a quarter of this function).
+    Criterion &own = own_, &across = across_;
+    auto recorded = [&](int quad, Criterion& c) {
+      return history_ && quads_[static_cast<size_t>(quad)].recording ? &c : nullptr;
+    };
+    double px = pixels(q, p, slot, d, recorded(q, own));
     bool stuck = blocked(q, p, d);
     // The half across a side shared with a finer quad may be a sample's
     // side there (the finer quad's mark is blocked then): that half is the
     // coarser quad's full mesh already, nothing to split.
-    const bool halves = other && MarkGrid::splittable(grid_.diamond(other->p));
+    const Diamond od = other ? grid_.diamond(other->p) : Diamond{};
+    const bool halves = other && MarkGrid::splittable(od);
+    const uint32_t other_slot = halves ? grid_.slot(other->p) : 0;
     if (halves) {
-      const Diamond od = grid_.diamond(other->p);
-      px = std::max(px, pixels(other->quad, other->p, od, history_ ? &across : nullptr));
+      px = std::max(px,
+                    pixels(other->quad, other->p, other_slot, od, recorded(other->quad, across)));
       stuck |= blocked(other->quad, other->p, od);
+    }
+    if (px > o_.pixel_error && stuck) {  // the statistics want the value itself
+      px = pixels(q, p, slot, d, nullptr, true);
+      if (halves) {
+        px = std::max(px, pixels(other->quad, other->p, other_slot, od, nullptr, true));
+      }
     }
     if (history_) {
       record(q, p, own, stuck);
@@ -1061,13 +1122,18 @@ class Refiner {
       if (other) want_split_across(other->quad, other->p, grid_.diamond(other->p));
     }
     m = kKept;
-    if (other && marks_.get(other->quad, other->p) == kUnknown) mark(other->quad, other->p) = kKept;
+    // (A sample's side across, never split, has no mark.)
+    if (halves && marks_.get(other->quad, other_slot) == kUnknown) {
+      marks_.at(other->quad, other_slot) = kKept;
+    }
   }
 
   // The triangle with right angle at r and hypotenuse (a, b), or its children.
   void emit(int q, GridPoint r, GridPoint a, GridPoint b, std::vector<uint32_t>& out) {
     const GridPoint m{(a.x + b.x) / 2, (a.y + b.y) / 2};
-    if (marks_.get(q, m) == kSplit && MarkGrid::splittable(grid_.diamond(m))) {
+    // A hypotenuse of two cells along an axis is a sample's side: never split.
+    const bool sample_side = std::abs(a.x - b.x) + std::abs(a.y - b.y) == 2;
+    if (!sample_side && mark_of(q, m) == kSplit) {
       emit(q, m, a, r, out);
       emit(q, m, r, b, out);
       return;
@@ -1083,7 +1149,7 @@ class Refiner {
   const Selection& selection_;
   const RefineOptions& o_;
   RefineCache::Impl& cache_;
-  MarkBlocks& marks_;
+  SlotMarks& marks_;
   MarkGrid grid_;
   int deepest_ = 0;
   int64_t globe_width_ = 0;
@@ -1095,7 +1161,8 @@ class Refiner {
   RefineHistory::Impl* history_;
   double corner_;  // tan^2 of the screen's corner
   bool reuse_all_ = false;
-  int block_shift_ = 0;  // blocks of 2^block_shift_ x 2^block_shift_ cells
+  Criterion own_, across_;  // decide()'s
+  int block_shift_ = 0;     // blocks of 2^block_shift_ x 2^block_shift_ cells
   int32_t block_columns_ = 0, block_rows_ = 0;
 };
 
@@ -1116,7 +1183,8 @@ Result<RefinedMesh> refine(const View& view, TerrainModel& terrain, const Select
   RefineCache local(0);
   RefineCache& cache = options.cache ? *options.cache : local;
   // The marks' blocks stay with the thread for its next frame.
-  thread_local MarkBlocks marks;
+  thread_local SlotMarks marks;
+  thread_local size_t last_indices = 0;
   Refiner r(view, terrain, selection, options, cache.impl(), marks);
   RELIEF_CHECK(r.prepare());
   RefinedMesh mesh;
@@ -1128,7 +1196,8 @@ Result<RefinedMesh> refine(const View& view, TerrainModel& terrain, const Select
     } else {
       r.bottom_up();
     }
-    mesh = r.mesh();
+    mesh = r.mesh(last_indices);
+    last_indices = mesh.indices.size();
   }
   r.save_history(mesh);
   mesh.stats.seconds =
