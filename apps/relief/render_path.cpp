@@ -253,6 +253,7 @@ int render_path(const Args& args, RenderSetup& setup, const Clock& clock) {
         {"cpu_ms", r.report.cpu_seconds * 1e3},
         {"selection_ms", r.report.selection.seconds * 1e3},
         {"draw_ms", (frame.prepare_seconds + frame.gpu_seconds) * 1e3},
+        {"gpu_ms", frame.gpu_seconds * 1e3},
         {"quads", r.report.selection.quads},
         {"triangles", frame.triangles},
         {"triangles_per_pixel", frame.triangles_per_pixel()},

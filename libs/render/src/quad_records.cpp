@@ -1,5 +1,6 @@
 #include "quad_records.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "relief/geo/ellipsoid.h"
@@ -64,6 +65,19 @@ QuadRecord QuadRecords::make(const lod::SelectedQuad& q, const lod::Vec3& eye) {
                (q.key.y & 1u) << 13 | static_cast<uint32_t>(q.parent_data_sides) << 14 |
                static_cast<uint32_t>(q.parent_data_corners) << 18 | kNormalFloat;
   return r;
+}
+
+float nearness(const QuadRecord& r) {
+  float centre[3] = {};
+  for (int c = 0; c < 4; ++c) {
+    for (int i = 0; i < 3; ++i) centre[i] += 0.25f * r.anchor[c][i];
+  }
+  float reach = 0;
+  for (int c = 0; c < 4; ++c) {
+    reach = std::max(reach, std::hypot(r.anchor[c][0] - centre[0], r.anchor[c][1] - centre[1],
+                                       r.anchor[c][2] - centre[2]));
+  }
+  return std::hypot(centre[0], centre[1], centre[2]) - reach;
 }
 
 }  // namespace relief::render

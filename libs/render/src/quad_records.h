@@ -36,6 +36,12 @@ struct QuadRecord {
 };
 static_assert(sizeof(QuadRecord) == 22 * 16, "the shader reads 22 texels per quad");
 
+// How near the eye a quad is, to draw the nearest first: the distance from
+// the eye to the centre of its corners less their farthest distance from
+// that centre (a quad under the eye comes first however large). An
+// estimate for ordering draws, not a bound (terrain rises above the corners).
+float nearness(const QuadRecord& r);
+
 class QuadRecords {
  public:
   // The geometry of quad `q` seen from `eye` (windows, layers and their

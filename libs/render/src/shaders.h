@@ -3,6 +3,8 @@
 // its quad's record (quad_records.h) and the height sampled from the quad's
 // elevation tile; nothing per vertex is computed on the CPU.
 
+#include <string>
+
 namespace relief::render {
 
 // Positions. A vertex is its anchor (a corner known in double on the CPU,
@@ -142,7 +144,15 @@ void main() {
 }
 )";
 
+// Colours: hypsometric tints times a hillshade, or the imagery (or texture
+// layers' composite) draped. DRAPED 0 (fragment_shader(false)) leaves the
+// imagery out for scenes without any: llvmpipe runs both sides of a branch
+// for a whole block of pixels, so the derivatives and the sampling would
+// cost every pixel (a fifth of the shader) for nothing.
 inline constexpr const char* kTerrainFragmentShader = R"(#version 450 core
+#ifndef DRAPED
+#define DRAPED 1
+#endif
 in vec2 sample_position;
 in vec2 imagery_position;
 in float height;
@@ -150,47 +160,58 @@ in float cos_lat;
 flat in ivec2 layers;
 flat in uint has;
 flat in float sample_metres;
-uniform sampler2DArray heights, imagery;
+uniform sampler2DArray slopes, imagery;
 uniform int border, imagery_border;
 uniform float exaggeration;
 out vec4 colour;
 
-float h_at(vec2 p) {
-  return (has & 1u) != 0u
-             ? textureLod(heights, vec3((p + float(border)) / vec2(textureSize(heights, 0).xy), float(layers.x)), 0.0).r
-             : 0.0;
-}
-
+// Piecewise linear between the stops, without branches: each segment moves
+// the colour from the previous stop's to its own by how far the height has
+// gone through it (0 before it, 1 past it).
 vec3 hypsometric(float h) {
   const float stops[6] = float[](-50.0, 0.0, 300.0, 1000.0, 2000.0, 3500.0);
   const vec3 colours[6] = vec3[](vec3(0.35, 0.55, 0.75), vec3(0.40, 0.62, 0.38), vec3(0.55, 0.70, 0.40),
                                  vec3(0.78, 0.72, 0.50), vec3(0.62, 0.50, 0.40), vec3(0.95, 0.95, 0.95));
-  if (h <= stops[0]) return colours[0];
+  vec3 c = colours[0];
   for (int i = 1; i < 6; ++i) {
-    if (h < stops[i]) return mix(colours[i - 1], colours[i], (h - stops[i - 1]) / (stops[i] - stops[i - 1]));
+    c = mix(c, colours[i], clamp((h - stops[i - 1]) / (stops[i] - stops[i - 1]), 0.0, 1.0));
   }
-  return colours[5];
+  return c;
 }
 
 void main() {
-  // Hillshade from the local slope (sun from the north-west, 45 degrees up).
-  float dx = (h_at(sample_position + vec2(1, 0)) - h_at(sample_position - vec2(1, 0))) /
-             (2.0 * sample_metres * max(cos_lat, 0.01));
-  float dy = (h_at(sample_position + vec2(0, 1)) - h_at(sample_position - vec2(0, 1))) / (2.0 * sample_metres);
+  // Hillshade from the local slope (sun from the north-west, 45 degrees up):
+  // the height differences across the sample, east - west and south - north,
+  // made once per tile (height_slopes.h), one fetch.
+  vec2 d = vec2(0.0);
+  if ((has & 1u) != 0u) {
+    d = textureLod(slopes, vec3((sample_position + float(border)) / vec2(textureSize(slopes, 0).xy), float(layers.x)), 0.0).rg;
+  }
+  float dx = d.x / (2.0 * sample_metres * max(cos_lat, 0.01));
+  float dy = d.y / (2.0 * sample_metres);
   vec3 n = normalize(vec3(-dx * exaggeration, dy * exaggeration, 1.0));  // east, north, up (rows run south)
   vec3 sun = normalize(vec3(-1.0, 1.0, 1.414));
   float shade = clamp(dot(n, sun), 0.0, 1.0);
+  vec4 drape = vec4(0.0);
+#if DRAPED
   // Where the imagery has no data (alpha 0) the terrain shows its own colours
   // (imagery colours are premultiplied by alpha). Derivatives taken in uniform
   // control, the texture read only where there is imagery.
   vec2 st = (imagery_position + float(imagery_border)) / vec2(textureSize(imagery, 0).xy);
   vec2 st_dx = dFdx(st), st_dy = dFdy(st);
-  vec4 drape = vec4(0.0);
   if ((has & 4u) != 0u) drape = textureGrad(imagery, vec3(st, float(layers.y)), st_dx, st_dy);
+#endif
   vec3 base = hypsometric(height) * (1.0 - drape.a) + drape.rgb;
   float light = mix(0.35 + 0.65 * shade, 0.75 + 0.25 * shade, drape.a);
   colour = vec4(base * light, 1.0);
 }
 )";
+
+// The fragment shader with (`draped`) or without the imagery.
+inline std::string fragment_shader(bool draped) {
+  std::string source = kTerrainFragmentShader;
+  if (!draped) source.insert(source.find('\n') + 1, "#define DRAPED 0\n");
+  return source;
+}
 
 }  // namespace relief::render

@@ -157,8 +157,9 @@ class GlTerrainRenderer final : public TerrainRenderer {
     return {};
   }
 
-  Status init() {
-    program_ = RELIEF_TRY(gl::Program::link(kTerrainVertexShader, kTerrainFragmentShader));
+  // `draped`: imagery or texture layers will be drawn (the fragment shader's variant).
+  Status init(bool draped) {
+    program_ = RELIEF_TRY(gl::Program::link(kTerrainVertexShader, fragment_shader(draped).c_str()));
     const lod::MeshTopology& mesh = elevation_.mesh();
     std::vector<GridVertex> vertices;
     for (const lod::MeshVertex& v : mesh.vertices())
@@ -174,7 +175,7 @@ class GlTerrainRenderer final : public TerrainRenderer {
     glVertexArrayBindingDivisor(vao_.id(), 1, 1);
     // Bound where a kind has no tiles yet.
     const float zero[4] = {};
-    for (gl::TextureArray* a : {&empty_heights_, &empty_imagery_}) {
+    for (gl::TextureArray* a : {&empty_heights_, &empty_slopes_, &empty_imagery_}) {
       a->set_layer_size(1, 1);
       a->reserve(1);
       a->upload(0, zero, setup);
@@ -188,7 +189,7 @@ class GlTerrainRenderer final : public TerrainRenderer {
                           const lod::RefinedMesh* refined) override {
     const auto start = Clock::now();
     processing_per_frame_ = o.processing_per_frame;
-    FrameStats stats = RELIEF_TRY(prepare(view, selection, refined));
+    FrameStats stats = RELIEF_TRY(prepare(view, selection, refined, true));
     stats.prepare_seconds = std::chrono::duration<double>(Clock::now() - start).count();
     stats.pixels = static_cast<uint64_t>(target.width()) * static_cast<uint64_t>(target.height());
 
@@ -226,7 +227,7 @@ class GlTerrainRenderer final : public TerrainRenderer {
   Result<std::vector<float>> capture(const lod::View& view, const lod::Selection& selection,
                                      const RenderOptions& o, const lod::RefinedMesh* refined) {
     processing_per_frame_ = o.processing_per_frame;
-    const FrameStats stats = RELIEF_TRY(prepare(view, selection, refined));
+    const FrameStats stats = RELIEF_TRY(prepare(view, selection, refined, false));
     if (!capture_program_.id()) {
       capture_program_ = RELIEF_TRY(
           gl::Program::link(kTerrainVertexShader, kTerrainFragmentShader, {"captured_position"}));
@@ -252,9 +253,10 @@ class GlTerrainRenderer final : public TerrainRenderer {
 
  private:
   // Records, draw commands and textures of a frame, on the GPU; uploads only
-  // what differs from the previous frame.
+  // what differs from the previous frame. Draw commands nearest quad first
+  // when `near_to_far`, else in the selection's order (captures).
   Result<FrameStats> prepare(const lod::View& view, const lod::Selection& selection,
-                             const lod::RefinedMesh* refined) {
+                             const lod::RefinedMesh* refined, bool near_to_far) {
     if (selection.quads.size() > max_quads_) {
       return fail(
           fmt::format("{} quads in a frame, more than the {} the GPU's buffer textures hold",
@@ -272,6 +274,7 @@ class GlTerrainRenderer final : public TerrainRenderer {
     const lod::MeshTopology& mesh = elevation_.mesh();
     records_.clear();
     commands_.clear();
+    nearness_.clear();
     for (size_t q = 0; q < selection.quads.size(); ++q) {
       const lod::SelectedQuad& quad = selection.quads[q];
       QuadRecord r = record_maker_.make(quad, view.eye);
@@ -307,8 +310,10 @@ class GlTerrainRenderer final : public TerrainRenderer {
         c.first_index = mesh.first_index(quad.finer_sides);
       }
       commands_.push_back(c);
+      nearness_.push_back(nearness(r));
       stats.triangles += c.count / 3;
     }
+    if (near_to_far) sort_near_to_far();
     if (write_if_changed(records_buffer_, previous_records_, records_, uploads)) {
       records_texture_.attach(records_buffer_);
     }
@@ -340,6 +345,20 @@ class GlTerrainRenderer final : public TerrainRenderer {
     stats.uploads = static_cast<uint32_t>(slots_.uploads() - uploads_before);
     stats.gpu_evicted = static_cast<uint32_t>(slots_.evicted() - evicted_before);
     return stats;
+  }
+
+  // Draw commands nearest quad first (by nearness()): llvmpipe tests depth
+  // before shading a block of pixels, so pixels behind terrain already drawn
+  // cost no shading (the order does not change the image: the depth test
+  // keeps the nearest fragment whatever the order).
+  void sort_near_to_far() {
+    order_.resize(commands_.size());
+    std::iota(order_.begin(), order_.end(), 0u);
+    std::stable_sort(order_.begin(), order_.end(),
+                     [&](uint32_t a, uint32_t b) { return nearness_[a] < nearness_[b]; });
+    sorted_commands_.clear();
+    for (uint32_t i : order_) sorted_commands_.push_back(commands_[i]);
+    commands_.swap(sorted_commands_);
   }
 
   // A refined mesh the GPU can draw without reading outside its buffers.
@@ -386,12 +405,14 @@ class GlTerrainRenderer final : public TerrainRenderer {
     glBindBuffer(GL_DRAW_INDIRECT_BUFFER, commands_buffer_.id());
     glBindTextureUnit(0, slots_.heights().layers() ? slots_.heights().id() : empty_heights_.id());
     glBindTextureUnit(1, slots_.imagery().layers() ? slots_.imagery().id() : empty_imagery_.id());
+    glBindTextureUnit(3, slots_.slopes().layers() ? slots_.slopes().id() : empty_slopes_.id());
     float vp[16];
     view_projection(view, vp);
     glUniformMatrix4fv(program.location("view_projection"), 1, GL_FALSE, vp);
     glUniform1i(program.location("heights"), 0);
     glUniform1i(program.location("imagery"), 1);
     glUniform1i(program.location("records"), 2);
+    glUniform1i(program.location("slopes"), 3);
     glUniform1i(program.location("border"), elevation_.border());
     // Composites keep a one-sample border (Compositor::composite).
     glUniform1i(program.location("imagery_border"), !layers_.empty() ? 1
@@ -705,12 +726,15 @@ class GlTerrainRenderer final : public TerrainRenderer {
   gl::Buffer records_buffer_, commands_buffer_, refined_indices_;
   gl::BufferTexture records_texture_;
   std::vector<QuadRecord> records_, previous_records_;
-  std::vector<DrawCommand> commands_, previous_commands_;
+  std::vector<DrawCommand> commands_, previous_commands_, sorted_commands_;
+  std::vector<float> nearness_;  // per quad: nearness()
+  std::vector<uint32_t> order_;
   std::vector<uint32_t> previous_refined_indices_;
   int refined_k_ = -1;  // the prepared frame's grid, -1: the mesh topology
   QuadRecords record_maker_;
   TileSlots slots_;
   gl::TextureArray empty_heights_{GL_R32F, GL_RED, GL_FLOAT, 4},
+      empty_slopes_{GL_RG16F, GL_RG, GL_FLOAT, 8},
       empty_imagery_{GL_RGBA8, GL_RGBA, GL_UNSIGNED_BYTE, 4};
 };
 
@@ -729,7 +753,7 @@ Result<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(lod::TerrainMod
   auto r = std::make_unique<GlTerrainRenderer>(
       elevation, imagery, imagery_tiles, gpu_budget, std::max(max_layers, 1),
       static_cast<size_t>(std::max(max_texels, 0)) * 16 / sizeof(QuadRecord));
-  RELIEF_CHECK(r->init());
+  RELIEF_CHECK(r->init(imagery != nullptr));
   return std::unique_ptr<TerrainRenderer>(std::move(r));
 }
 
@@ -742,7 +766,7 @@ Result<std::unique_ptr<TerrainRenderer>> TerrainRenderer::create(lod::TerrainMod
   auto r = std::make_unique<GlTerrainRenderer>(
       elevation, nullptr, nullptr, gpu_budget, std::max(max_layers, 1),
       static_cast<size_t>(std::max(max_texels, 0)) * 16 / sizeof(QuadRecord));
-  RELIEF_CHECK(r->init());
+  RELIEF_CHECK(r->init(!layers.empty()));
   RELIEF_CHECK(r->init_layers(std::move(layers)));
   return std::unique_ptr<TerrainRenderer>(std::move(r));
 }

@@ -4,16 +4,20 @@
 
 #include <fmt/format.h>
 
+#include "height_slopes.h"
+
 namespace relief::render {
 
 TileSlots::TileSlots(uint64_t budget_bytes, int max_layers)
     : budget_(budget_bytes),
       max_layers_(max_layers),
       heights_(GL_R32F, GL_RED, GL_FLOAT, 4),
+      slopes_(GL_RG16F, GL_RG, GL_HALF_FLOAT, 4),
       imagery_(GL_RGBA8, GL_RGBA, GL_UNSIGNED_BYTE, 4) {}
 
 uint64_t TileSlots::allocated_bytes() const {
-  return static_cast<uint64_t>(heights_.layers()) * heights_.layer_bytes() +
+  return static_cast<uint64_t>(heights_.layers()) *
+             (heights_.layer_bytes() + slopes_.layer_bytes()) +
          static_cast<uint64_t>(imagery_.layers()) * imagery_.layer_bytes();
 }
 
@@ -50,7 +54,8 @@ Result<int> TileSlots::insert(const TextureKey& key, int width, int height, cons
     return fail(fmt::format("tile {} is {}x{}, the store's others {}x{}", key.tile.to_string(),
                             width, height, p.array.width(), p.array.height()));
   }
-  const uint64_t bytes = p.array.layer_bytes();
+  if (!key.imagery && !slopes_.sized()) slopes_.set_layer_size(width, height);
+  const uint64_t bytes = p.array.layer_bytes() + (key.imagery ? 0 : slopes_.layer_bytes());
   while (used_ + bytes > budget_ && evict_one(std::nullopt)) {
   }
   if (p.free.empty() && p.array.layers() >= max_layers_ && !evict_one(key.imagery)) {
@@ -69,11 +74,17 @@ Result<int> TileSlots::insert(const TextureKey& key, int width, int height, cons
     if (layers > fits) layers = std::max(fits, old + 16);
     layers = std::min(layers, max_layers_);
     p.array.reserve(layers);
+    if (!key.imagery) slopes_.reserve(layers);
     for (int l = layers - 1; l >= old; --l) p.free.push_back(l);
   }
   const int layer = p.free.back();
   p.free.pop_back();
   if (pixels) p.array.upload(layer, pixels, uploads);
+  if (pixels && !key.imagery) {
+    const std::vector<uint16_t> slopes = height_slopes(
+        {static_cast<const float*>(pixels), static_cast<size_t>(width) * height}, width, height);
+    slopes_.upload(layer, slopes.data(), uploads);
+  }
   order_.push_front(key);
   entries_.emplace(key, Entry{layer, bytes, frame_, order_.begin()});
   used_ += bytes;

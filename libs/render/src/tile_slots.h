@@ -1,7 +1,8 @@
 #pragma once
-// The GPU cache (L3): data tiles as layers of two texture arrays (elevation,
-// R32F, and imagery, RGBA8) within a byte budget, least recently used first
-// out. Tiles used by the current frame are pinned; only older ones are
+// The GPU cache (L3): data tiles as layers of texture arrays (elevation,
+// R32F, with its hillshade slopes in an RG16F array of the same layers
+// (height_slopes.h), and imagery, RGBA8) within a byte budget, least
+// recently used first out. Tiles used by the current frame are pinned; only older ones are
 // evicted. A tile is uploaded once when it arrives and stays resident while
 // it is used. Render thread only (it owns the GL context).
 //
@@ -59,17 +60,18 @@ class TileSlots {
 
   // The layer of a resident tile, now pinned for this frame.
   std::optional<int> find(const TextureKey& key);
-  // Uploads a tile of `width` x `height` texels (R32F heights or RGBA8
-  // colours) to a free layer, pinned for this frame, evicting unpinned tiles
-  // while over budget and, when no layer is free, reusing the least recently
-  // used unpinned one or growing the array (see above). Fails when
-  // the tile's size differs from the store's others, or when this frame
-  // already pins every layer an array can have. Null `pixels`: the caller
-  // writes the layer on the GPU (texture-layer composites).
+  // Uploads a tile of `width` x `height` texels (R32F heights, with the
+  // slopes made from them, or RGBA8 colours) to a free layer, pinned for this frame, evicting
+  // unpinned tiles while over budget and, when no layer is free, reusing the least recently used
+  // unpinned one or growing the array (see above). Fails when the tile's size differs from the
+  // store's others, or when this frame already pins every layer an array can have. Null `pixels`:
+  // the caller writes the layer on the GPU (texture-layer composites).
   Result<int> insert(const TextureKey& key, int width, int height, const void* pixels,
                      gl::Uploads& uploads);
 
   const gl::TextureArray& heights() const { return heights_; }
+  // Per layer of heights(): its tile's slopes (height_slopes.h).
+  const gl::TextureArray& slopes() const { return slopes_; }
   const gl::TextureArray& imagery() const { return imagery_; }
   uint64_t used_bytes() const { return used_; }
   uint64_t allocated_bytes() const;
@@ -103,7 +105,7 @@ class TileSlots {
   uint64_t budget_, used_ = 0, frame_ = 0, uploads_ = 0, evicted_ = 0;
   int max_layers_;
   int pinned_heights_ = 0, pinned_imagery_ = 0;
-  gl::TextureArray heights_, imagery_;
+  gl::TextureArray heights_, slopes_, imagery_;
   std::vector<int> free_heights_, free_imagery_;
   std::list<TextureKey> order_;  // most recently used first
   std::unordered_map<TextureKey, Entry, TextureKeyHash> entries_;
