@@ -308,6 +308,42 @@ TEST_F(TileLoaderTest, FailuresAreReportedNotCachedAndRetriedAfterDoublingPauses
   EXPECT_TRUE(*l.get(key));
 }
 
+// Each load that ends, resident or failed, is announced once by the worker
+// that ended it (LoaderOptions::on_settled: a waiting viewer wakes up), after
+// its state changed and outside the loader's lock (the listener may look).
+// Nothing is announced while the loads wait for the link.
+TEST_F(TileLoaderTest, AWorkerAnnouncesEachLoadThatEnds) {
+  auto flaky = std::make_shared<FlakySource>(tiles::local_source(store_dir()));
+  open(30ms, flaky);
+  flaky->healthy = true;
+  std::atomic<int> settled{0};
+  std::atomic<uint64_t> ended_seen{0};  // loaded + failed seen by the last announcement
+  stream::TileLoader* self = nullptr;
+  stream::LoaderOptions o{.max_in_flight = 2};
+  o.on_settled = [&] {
+    const stream::LoaderStats s = self->stats();  // the lock is free
+    ended_seen = std::max<uint64_t>(ended_seen, s.loaded + s.failed);
+    ++settled;
+  };
+  stream::TileLoader& l = loader(o);
+  self = &l;
+  settled = 0;  // level 0, read at creation, is not a load that ends later
+  const uint64_t at_start = l.stats().loaded;
+  const auto keys = finest();
+  frame({{keys[0], 3}, {keys[1], 2}, {keys[2], 1}});
+  ASSERT_TRUE(clock_.wait_for_sleepers(2));
+  EXPECT_EQ(settled, 0);
+  set_free(true);
+  wait_idle();
+  EXPECT_EQ(settled, 3);
+  EXPECT_EQ(ended_seen, at_start + 3);
+  flaky->healthy = false;  // a failure is an end too
+  frame({{keys[3], 1}});
+  wait_idle();
+  EXPECT_EQ(l.state(keys[3]), TileState::Failed);
+  EXPECT_EQ(settled, 4);
+}
+
 // What a frame draws, to compare two selections.
 std::vector<std::tuple<TileKey, int, int, int>> drawn(const lod::Selection& s) {
   std::vector<std::tuple<TileKey, int, int, int>> out;

@@ -4,8 +4,10 @@
 // left out behind the horizon; the overlay draws them over a frame.
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <set>
 #include <thread>
@@ -163,10 +165,12 @@ class SceneHints : public GlSceneTest {
   void SetUp() override { set_up_gl(kCamera.width, kCamera.height_px); }
 
   Result<std::unique_ptr<Scene>> scene(bool detect, bool interactive,
-                                       const tiles::Store& store = sar()) {
+                                       const tiles::Store& store = sar(),
+                                       std::function<void()> on_change = nullptr) {
     SceneOptions o;
     o.interactive = interactive;
     o.detect = detect;
+    o.on_change = std::move(on_change);
     render::TextureLayer l;
     l.store = &store;
     l.range_max = static_cast<float>(store.manifest().stats.mean * 3);
@@ -208,7 +212,10 @@ TEST_F(SceneHints, HintsAreDrawnOverTheFrameAndInteractiveFramesWaitForNone) {
 
   // Interactive: the first frames draw what is detected so far and are not
   // complete while tiles wait; the frames then converge to the complete one.
-  auto interactive = scene(true, true);
+  // Each layer tile that arrives and each tile's hints detected are
+  // announced (SceneOptions::on_change: a waiting viewer draws again).
+  std::atomic<size_t> changes{0};
+  auto interactive = scene(true, true, sar(), [&changes] { ++changes; });
   ASSERT_TRUE(interactive) << interactive.error().message;
   f = (*interactive)->draw(kCamera, *target_);
   ASSERT_TRUE(f) << f.error().message;
@@ -222,6 +229,9 @@ TEST_F(SceneHints, HintsAreDrawnOverTheFrameAndInteractiveFramesWaitForNone) {
   ASSERT_TRUE(f->complete);
   EXPECT_EQ(f->hints, (*complete)->last_hints().size());
   EXPECT_EQ(*target_->read_rgba(), with);
+  const size_t detected = (*interactive)->target_hints()->tiles_detected();
+  EXPECT_GT(detected, 0u);
+  EXPECT_GT(changes, detected) << "the detections and at least one tile load";
 }
 
 TEST_F(SceneHints, DetectionNeedsASarLayer) {

@@ -19,8 +19,10 @@
 #include "../support/images.h"
 #include "../support/test_support.h"
 #include "../video/movie_probe.h"
+#include "glfw_input.h"
 #include "relief/base/manual_clock.h"
 #include "relief/lod/vec.h"
+#include "relief/stream/throttled_source.h"
 #include "relief/view/ground.h"
 #include "relief/view/lens_drag.h"
 #include "relief/window/viewer.h"
@@ -325,6 +327,109 @@ TEST_F(WindowTest, AStillCompleteViewIsNotRedrawnUntilAnEventComes) {
   s = v->summary();
   EXPECT_EQ(s.frames, drawn + 7);
   EXPECT_EQ(s.recorded.size(), 5u);
+}
+
+// Idle while waiting: a still view whose tiles have not arrived is not
+// redrawn until one does. The Pyrenees store behind a link whose answers
+// wait on a clock of the test's; the viewer's clock never moves, so neither
+// the idle timeout nor the camera can draw a frame: only input, which there
+// is none of, or a tile's arrival.
+TEST_F(WindowTest, AStillViewWaitingForTilesIsRedrawnOnlyWhenOneArrives) {
+  ManualClock clock, link_clock;
+  stream::LinkModel link;
+  link.latency = std::chrono::seconds(1);
+  auto source = stream::throttled_source(tiles::local_source(testing::pyrenees_store().root()),
+                                         link, link_clock);
+  link_clock.set_free(true);  // the manifest, the indices and level 0 at once
+  auto store = tiles::Store::open(source);
+  ASSERT_TRUE(store) << store.error().message;
+  ViewerOptions o;
+  o.start = kCamera;
+  o.idle_wait_seconds = 0.02;  // real time per wait; on the viewer's clock it never ends
+  view::SceneOptions so;
+  so.mesh_level = 3;
+  auto created = Viewer::create(*window_, &*store, nullptr, so, o, clock);
+  ASSERT_TRUE(created) << created.error().message;
+  Viewer& v = **created;
+  // Whatever happens, no load is left asleep on the link when the viewer goes.
+  struct Free {
+    ManualClock& clock;
+    ~Free() { clock.set_free(true); }
+  } free_link{link_clock};
+  link_clock.set_free(false);
+  stream::TileLoader& loader = *v.scene().elevation_loader();
+  const uint64_t loaded_at_start = loader.stats().loaded;
+  // The first frames ask for level 1 and draw level 0; the loads wait on the link.
+  for (int i = 0; i < 50 && v.summary().skipped_frames == 0; ++i) ASSERT_TRUE(v.frame());
+  ViewerSummary s = v.summary();
+  ASSERT_EQ(s.skipped_frames, 1u) << "a still, incomplete view idles";
+  EXPECT_FALSE(s.complete);
+  ASSERT_TRUE(link_clock.wait_for_sleepers(1));
+  const size_t drawn = s.frames;
+  for (int i = 0; i < 20; ++i) ASSERT_TRUE(v.frame());
+  s = v.summary();
+  EXPECT_EQ(s.frames, drawn) << "no tile arrived: nothing drawn";
+  EXPECT_EQ(s.skipped_frames, 21u);
+
+  // The link answers: the loads that end wake the viewer, which draws.
+  const uint64_t events = window_->events();
+  link_clock.advance(std::chrono::seconds(1));
+  for (int i = 0; i < 500 && v.summary().frames == drawn; ++i) ASSERT_TRUE(v.frame());
+  EXPECT_EQ(v.summary().frames, drawn + 1) << "an arrival draws a frame";
+  EXPECT_EQ(window_->events(), events) << "without input";
+  EXPECT_GT(loader.stats().loaded, loaded_at_start);
+
+  // Until complete, one frame per wake at most: never more frames than
+  // loads that ended (each wake is one) and the frame after the last.
+  link_clock.set_free(true);
+  const uint64_t ended_before = loader.stats().loaded + loader.stats().failed;
+  const size_t frames_before = v.summary().frames, skipped_before = v.summary().skipped_frames;
+  for (int i = 0; i < 3000 && !v.summary().complete; ++i) ASSERT_TRUE(v.frame());
+  s = v.summary();
+  ASSERT_TRUE(s.complete);
+  const uint64_t ended = loader.stats().loaded + loader.stats().failed - ended_before;
+  EXPECT_LE(s.frames - frames_before, ended + 1);
+  EXPECT_EQ(window_->events(), events);
+  // Complete: no arrival (a late prefetch) draws it again.
+  for (int i = 0; i < 5; ++i) ASSERT_TRUE(v.frame());
+  EXPECT_EQ(v.summary().frames, s.frames);
+  EXPECT_GT(v.summary().skipped_frames, skipped_before);
+}
+
+// Per-frame statistics: a frame's frame time is its own period, from its
+// start to the next frame's start, known once that one starts (the last
+// frame has none); the percentiles are over those periods.
+TEST_F(WindowTest, AFramesTimeIsItsOwnPeriod) {
+  ManualClock clock;
+  ViewerOptions o;
+  o.start = kCamera;
+  o.collect_frames = true;
+  o.idle_wait_seconds = 0;  // every call draws
+  auto v = viewer(o, clock);
+  ASSERT_TRUE(v);
+  for (const auto period : {10ms, 30ms, 20ms}) {
+    ASSERT_TRUE(v->frame());
+    clock.advance(period);
+  }
+  ASSERT_TRUE(v->frame());
+  const ViewerSummary s = v->summary();
+  ASSERT_EQ(s.frames_list.size(), 4u);
+  EXPECT_DOUBLE_EQ(s.frames_list[0].frame_ms, 10);
+  EXPECT_DOUBLE_EQ(s.frames_list[1].frame_ms, 30);
+  EXPECT_DOUBLE_EQ(s.frames_list[2].frame_ms, 20);
+  EXPECT_DOUBLE_EQ(s.frames_list[3].frame_ms, 0);
+  EXPECT_DOUBLE_EQ(s.frames_list[2].time, 0.04);
+  EXPECT_DOUBLE_EQ(s.p50_frame_ms, 20);
+  EXPECT_DOUBLE_EQ(s.p99_frame_ms, 30);
+}
+
+// GLFW reports the cursor in window coordinates; frames and picking use
+// framebuffer pixels, twice as many per axis at a content scale of 2.
+TEST(WindowInput, CursorPositionsAreScaledToFramebufferPixels) {
+  EXPECT_EQ(cursor_to_pixels(100, 50, 640, 360, 1280, 720), std::make_pair(200.0, 100.0));
+  EXPECT_EQ(cursor_to_pixels(100, 50, 640, 360, 640, 360), std::make_pair(100.0, 50.0));
+  EXPECT_EQ(cursor_to_pixels(10, 10, 400, 200, 600, 400), std::make_pair(15.0, 20.0));
+  EXPECT_EQ(cursor_to_pixels(7, 9, 0, 0, 0, 0), std::make_pair(7.0, 9.0));  // minimised
 }
 
 size_t differing_pixels(const std::vector<uint8_t>& a, const std::vector<uint8_t>& b) {

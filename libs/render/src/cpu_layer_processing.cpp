@@ -16,7 +16,8 @@ bool running(const Result<lod::TilePtr>& r) {
 
 }  // namespace
 
-CpuLayerProcessing::CpuLayerProcessing(unsigned threads) {
+CpuLayerProcessing::CpuLayerProcessing(unsigned threads, std::function<void()> on_done)
+    : on_done_(std::move(on_done)) {
   if (threads == 0) threads = std::max(1u, std::thread::hardware_concurrency());
   for (unsigned i = 0; i < threads; ++i) threads_.emplace_back([this] { work(); });
 }
@@ -137,6 +138,11 @@ void CpuLayerProcessing::work() {
         if (oldest == done_.end() || it->second.order < oldest->second.order) oldest = it;
       }
       if (oldest != done_.end()) done_.erase(oldest);
+    }
+    if (on_done_) {
+      lock.unlock();
+      on_done_();
+      lock.lock();
     }
   }
 }

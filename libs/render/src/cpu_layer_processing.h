@@ -13,6 +13,7 @@
 // workers only touch the queue and the results, under the mutex.
 #include <condition_variable>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -54,8 +55,10 @@ class CpuLayerProcessing {
     uint64_t frame = 0;   // the last frame that asked for it (begin_frame)
   };
 
-  explicit CpuLayerProcessing(unsigned threads);  // 0: one per core
-  ~CpuLayerProcessing();                          // drops the queue, joins
+  // 0 threads: one per core. `on_done` (may be null) is called on a worker,
+  // outside the lock, after each result it stored (a waiting viewer wakes).
+  explicit CpuLayerProcessing(unsigned threads, std::function<void()> on_done = nullptr);
+  ~CpuLayerProcessing();  // drops the queue, joins
   CpuLayerProcessing(const CpuLayerProcessing&) = delete;
   CpuLayerProcessing& operator=(const CpuLayerProcessing&) = delete;
 
@@ -99,6 +102,7 @@ class CpuLayerProcessing {
   std::map<Key, Done> done_;
   uint64_t frame_ = 0, finished_ = 0;
   double job_seconds_ = 0;  // a running mean of a job's seconds
+  std::function<void()> on_done_;
   std::vector<std::jthread> threads_;
 };
 

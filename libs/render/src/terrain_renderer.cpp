@@ -134,6 +134,10 @@ class GlTerrainRenderer final : public TerrainRenderer {
     return set_texture_layers(std::move(layers));
   }
 
+  void set_on_processed(std::function<void()> on_processed) override {
+    on_processed_ = std::move(on_processed);
+  }
+
   Status set_texture_layers(std::vector<TextureLayer> layers) override {
     if (layers.size() != layers_.size() && !layers_.empty()) {
       return fail(
@@ -695,7 +699,7 @@ class GlTerrainRenderer final : public TerrainRenderer {
       }
       return std::make_shared<const tiles::Raster>(std::move(*out));
     }
-    if (!cpu_) cpu_ = std::make_unique<CpuLayerProcessing>(0);
+    if (!cpu_) cpu_ = std::make_unique<CpuLayerProcessing>(0, on_processed_);
     return cpu_->get_or_submit({i, key, version_}, std::move(job));
   }
 
@@ -717,6 +721,7 @@ class GlTerrainRenderer final : public TerrainRenderer {
   std::unique_ptr<gpuprocess::Compositor> compositor_;
   bool software_ = false;  // llvmpipe or softpipe: ProcessOn::automatic is the CPU
   std::unique_ptr<CpuLayerProcessing> cpu_;  // workers, on first use
+  std::function<void()> on_processed_;       // given to cpu_
   lod::TileProvider* imagery_tiles_ = nullptr;
   size_t max_quads_;  // records in a buffer texture
   gl::Program program_, capture_program_;

@@ -203,6 +203,7 @@ struct TileLoader::Impl {
         ++done.failures;
         move(r.key, done, TileState::Failed,
              {TileEventKind::Failed, r.key, 0, r.prefetch, tile.error().message});
+        settled(lock);
         continue;
       }
       done.failures = 0;
@@ -223,7 +224,16 @@ struct TileLoader::Impl {
              {TileEventKind::Evicted, r.key, done.bytes, r.prefetch, {}});
         erase(r.key);
       }
+      settled(lock);
     }
+  }
+
+  // LoaderOptions::on_settled, without the lock (the listener may ask for stats()).
+  void settled(std::unique_lock<std::mutex>& lock) {
+    if (!options.on_settled) return;
+    lock.unlock();
+    options.on_settled();
+    lock.lock();
   }
 };
 

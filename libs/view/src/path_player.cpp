@@ -15,6 +15,10 @@ namespace {
 
 using TileSet = std::unordered_set<geo::TileKey, geo::TileKeyHash>;
 
+// After the path, an incomplete view is drawn again when something arrived,
+// or after this long (real time: a safety timeout, as the viewer's).
+constexpr double kSettleWait = 0.25;
+
 // Adds the data tiles a selection draws (own and parent data) to `tiles`;
 // with `ancestors`, also the tiles above them, which a coarse-first loader
 // must have fetched before.
@@ -135,6 +139,7 @@ Result<PathSummary> play_path(Scene& scene, const std::vector<lod::Keyframe>& ke
       }
     }
     if (callbacks.frame_start) callbacks.frame_start(index);
+    const uint64_t changes = interactive ? scene.changes() : 0;
     const auto frame_start = clock.now();
     FrameRecord record;
     record.index = index;
@@ -152,8 +157,15 @@ Result<PathSummary> play_path(Scene& scene, const std::vector<lod::Keyframe>& ke
     complete_frames.push_back(record.report.complete);
     if (store) add_drawn(drawn, scene.terrain(), scene.last_selection(), true);
     if (callbacks.frame_done) RELIEF_CHECK(callbacks.frame_done(record));
-    if (interactive &&
-        !options.wait_complete) {  // real time: the next frame is due 1/fps after this one
+    if (interactive && !options.wait_complete) {
+      // Settling after the path: the same camera again would draw the same
+      // frame until the loaders (or detections) bring something, so wait for
+      // that (they have the cores meanwhile; at most kSettleWait, which also
+      // lets a failed tile be asked for again).
+      if (!on_path && !record.report.complete && !record.report.draws_more) {
+        scene.wait_for_change(changes, kSettleWait);
+      }
+      // Real time: the next frame is due 1/fps after this one.
       clock.sleep_until(frame_start + std::chrono::duration_cast<Clock::Duration>(
                                           std::chrono::duration<double>(1 / options.fps)));
     }

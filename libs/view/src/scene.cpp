@@ -2,7 +2,11 @@
 
 #include <algorithm>
 #include <cassert>
+#include <chrono>
 #include <cmath>
+#include <condition_variable>
+#include <functional>
+#include <mutex>
 #include <optional>
 
 #include <fmt/format.h>
@@ -31,6 +35,24 @@ lod::Camera extrapolate(const lod::Camera& prev, const lod::Camera& now, double 
   return c;
 }
 
+// Asynchronous work that ended (SceneOptions::on_change): counted for
+// wait_for_change(), then passed on. Shared with the threads that announce it.
+struct Changes {
+  std::function<void()> listener;
+  std::mutex mutex;
+  std::condition_variable changed;
+  uint64_t count = 0;
+
+  void announce() {
+    {
+      std::lock_guard lock(mutex);
+      ++count;
+    }
+    changed.notify_all();
+    if (listener) listener();
+  }
+};
+
 bool moved(const lod::Camera& a, const lod::Camera& b) {
   return a.lon != b.lon || a.lat != b.lat || a.height != b.height || a.heading != b.heading ||
          a.pitch != b.pitch;
@@ -44,6 +66,7 @@ struct Scene::Impl {
   SceneOptions options;
   const Clock& clock;
   lod::MeshTopology mesh;
+  std::shared_ptr<Changes> changes = std::make_shared<Changes>();
   std::unique_ptr<stream::TileLoader> loader, imagery_loader;
   std::vector<std::unique_ptr<stream::TileLoader>> layer_loaders;  // interactive texture layers
   std::unique_ptr<lod::TerrainModel> terrain;
@@ -180,6 +203,11 @@ Result<std::unique_ptr<Scene>> Scene::create(const tiles::Store* elevation,
   if (options.interactive) {
     stream::LoaderOptions lo = options.loader;
     lo.clock = &clock;
+    impl->changes->listener = options.on_change;
+    lo.on_settled = [own = options.loader.on_settled, changes = impl->changes] {
+      if (own) own();
+      changes->announce();
+    };
     if (elevation) {
       impl->loader = RELIEF_TRY(stream::TileLoader::create(*elevation, lo));
       impl->terrain = std::make_unique<lod::TerrainModel>(*elevation, impl->mesh, *impl->loader);
@@ -210,6 +238,8 @@ Result<std::unique_ptr<Scene>> Scene::create(const tiles::Store* elevation,
     impl->renderer = RELIEF_TRY(
         render::TerrainRenderer::create(*impl->terrain, std::move(layers), options.gpu_budget));
   }
+  const auto announce = [changes = impl->changes] { changes->announce(); };
+  if (options.interactive) impl->renderer->set_on_processed(announce);
   if (options.detect) {
     for (const render::TextureLayer& l : options.texture_layers) {
       if (l.store->manifest().kind == tiles::DatasetKind::Sar) {
@@ -218,7 +248,9 @@ Result<std::unique_ptr<Scene>> Scene::create(const tiles::Store* elevation,
       }
     }
     if (!impl->hint_store) return fail("--detect: needs a SAR texture layer (--texture SAR_STORE)");
-    impl->hints = RELIEF_TRY(TargetHints::create(*impl->hint_store, options.detector));
+    impl->hints = RELIEF_TRY(
+        TargetHints::create(*impl->hint_store, options.detector,
+                            options.interactive ? std::function<void()>(announce) : nullptr));
     impl->overlay = RELIEF_TRY(render::Overlay::create());
   }
   return std::unique_ptr<Scene>(new Scene(std::move(impl)));
@@ -298,6 +330,7 @@ Result<FrameReport> Scene::draw(const lod::Camera& camera, render::RenderTarget&
   report.selection = selection.stats;
   report.complete = selection.stats.waiting == 0 && !wants_more &&
                     report.draw.texture_misses == 0 && report.hint_tiles_pending == 0;
+  report.draws_more = wants_more || report.draw.layer_tiles_processed > 0;
   if (m.imagery_loader) {
     const stream::LoaderStats is = m.imagery_loader->stats();
     report.complete =
@@ -326,6 +359,18 @@ Result<uint32_t> Scene::request(const lod::Camera& camera) {
   RELIEF_CHECK(m.prefetch_along_motion(camera));
   m.terrain->end_frame();
   return selection.stats.waiting;
+}
+
+uint64_t Scene::changes() const {
+  std::lock_guard lock(impl_->changes->mutex);
+  return impl_->changes->count;
+}
+
+bool Scene::wait_for_change(uint64_t seen, double seconds) const {
+  Changes& c = *impl_->changes;
+  std::unique_lock lock(c.mutex);
+  return c.changed.wait_for(lock, std::chrono::duration<double>(std::max(0.0, seconds)),
+                            [&] { return c.count != seen; });
 }
 
 void Scene::cut() {

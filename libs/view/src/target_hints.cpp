@@ -108,6 +108,7 @@ struct TargetHints::Impl {
   std::deque<geo::TileKey> queue;
   std::set<geo::TileKey> queued;
   bool stopping = false;
+  std::function<void()> on_detected;
   std::thread worker;
 
   Impl(const tiles::Store& s, const process::DetectorParams& p) : store(s), params(p) {
@@ -141,6 +142,7 @@ struct TargetHints::Impl {
         queued.erase(key);
       }
       store_result(key, detect(key));
+      if (on_detected) on_detected();
     }
   }
 };
@@ -157,7 +159,8 @@ TargetHints::~TargetHints() {
 }
 
 Result<std::unique_ptr<TargetHints>> TargetHints::create(const tiles::Store& store,
-                                                         const process::DetectorParams& params) {
+                                                         const process::DetectorParams& params,
+                                                         std::function<void()> on_detected) {
   const tiles::Manifest& m = store.manifest();
   if (m.kind != tiles::DatasetKind::Sar || m.sample_type != tiles::SampleType::Float32 ||
       m.bands != 1) {
@@ -172,6 +175,7 @@ Result<std::unique_ptr<TargetHints>> TargetHints::create(const tiles::Store& sto
     return fail(store.root().string() + ": no positive amplitude in the store's statistics");
   }
   auto impl = std::make_unique<Impl>(store, params);
+  impl->on_detected = std::move(on_detected);
   Impl* raw = impl.get();
   impl->worker = std::thread([raw] { raw->run(); });
   return std::unique_ptr<TargetHints>(new TargetHints(std::move(impl)));

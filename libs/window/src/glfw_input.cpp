@@ -99,4 +99,13 @@ view::MouseButton button_from_glfw(int button) {
   }
 }
 
+std::pair<double, double> cursor_to_pixels(double x, double y, int window_width, int window_height,
+                                           int framebuffer_width, int framebuffer_height) {
+  if (window_width > 0 && framebuffer_width > 0)
+    x *= static_cast<double>(framebuffer_width) / window_width;
+  if (window_height > 0 && framebuffer_height > 0)
+    y *= static_cast<double>(framebuffer_height) / window_height;
+  return {x, y};
+}
+
 }  // namespace relief::window

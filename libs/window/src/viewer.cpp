@@ -37,6 +37,13 @@ Status Viewer::Impl::make_scene() {
   view::SceneOptions so = scene_options;
   const tiles::Store* layer = imagery_on ? imagery : nullptr;
   if (!layer && so.selection.texture == imagery) so.selection.texture = nullptr;
+  // A tile arrived (or hints were detected): an idle frame() waiting for it
+  // wakes up. Called on the loaders' threads, which the scene joins before
+  // it goes; the window outlives the viewer.
+  so.on_change = [wakeup = wakeup, w = &window] {
+    ++wakeup->changes;
+    if (!wakeup->posted.exchange(true)) w->wake();
+  };
   scene = RELIEF_TRY(view::Scene::create(elevation, layer, so, clock));
   scene->set_selection_frozen(frozen);  // a new scene has no selection yet: frozen from its first
   progress = {};
@@ -219,8 +226,13 @@ Viewer::~Viewer() {
 }
 
 Result<bool> Viewer::frame() {
+  using Idle = Impl::Idle;
   Impl& v = *impl_;
-  if (v.idle) {
+  const Clock::TimePoint entered = v.clock.now();
+  if (v.idle != Idle::no) {
+    // Cleared before the wait: a change from now on posts an event, one
+    // posted before is still pending; either ends the wait.
+    v.wakeup->posted = false;
     v.window.wait_events(v.options.idle_wait_seconds);
   } else {
     v.window.poll_events();
@@ -228,11 +240,19 @@ Result<bool> Viewer::frame() {
   v.poll_export();
   if (v.quit || v.window.should_close()) return false;
   const Clock::TimePoint now = v.clock.now();
-  if (v.idle && v.window.events() == v.drawn_events && v.export_status == v.drawn_export_status) {
-    v.last = now;  // time passes without frames: the next step starts from here
-    v.time = seconds_between(*v.start, now);
-    ++v.skipped;
-    return true;
+  if (v.idle != Idle::no) {
+    v.waited += seconds_between(entered, now);
+    // Waiting for tiles: a change in the scene draws, and so does the
+    // timeout on the clock (a failed tile is asked for again by a frame).
+    const bool woken = v.idle == Idle::waiting &&
+                       (v.wakeup->changes != v.drawn_changes ||
+                        seconds_between(v.drawn_start, now) >= v.options.idle_wait_seconds);
+    if (!woken && v.window.events() == v.drawn_events && v.export_status == v.drawn_export_status) {
+      v.last = now;  // time passes without frames: the next step starts from here
+      v.time = seconds_between(*v.start, now);
+      ++v.skipped;
+      return true;
+    }
   }
   // A frame after events draws, and so does the next: Dear ImGui shows the
   // effect of some input (hover, a release) one frame later.
@@ -240,9 +260,22 @@ Result<bool> Viewer::frame() {
   if (!v.start) v.start = v.last = now;
   const double dt = seconds_between(*v.last, now);
   const double cpu = static_cast<double>(std::clock()) / CLOCKS_PER_SEC;
-  const double cpu_ms = (cpu - v.last_cpu) * 1e3;
-  v.last = now;
+  if (v.index > 0) {
+    // The previous frame's period, from its start to this one's, known now:
+    // its frame time (idle waits between them left out).
+    const double period_ms = (seconds_between(v.drawn_start, now) - v.waited) * 1e3;
+    v.frame_ms.push_back(period_ms);
+    v.recent_ms.push_back(period_ms);
+    if (v.recent_ms.size() > kRecentFrames) v.recent_ms.pop_front();
+    if (v.options.collect_frames) {
+      v.frames.back().frame_ms = period_ms;
+      v.frames.back().process_cpu_ms = (cpu - v.last_cpu) * 1e3;
+    }
+  }
+  v.last = v.drawn_start = now;
   v.last_cpu = cpu;
+  v.waited = 0;
+  v.drawn_changes = v.wakeup->changes;  // what arrives from now on draws again
   v.time = seconds_between(*v.start, now);
   if (v.imagery_wanted != v.imagery_on) {
     v.imagery_on = v.imagery_wanted;
@@ -265,19 +298,27 @@ Result<bool> Viewer::frame() {
   if (v.recording) v.record(camera);
   const bool playing =
       v.controller->mode() == view::ControlMode::playback && !v.controller->finished();
-  v.idle = v.options.idle_wait_seconds > 0 && quiet && !v.recording && !playing && v.drawn_camera &&
-           same_camera(*v.drawn_camera, camera) &&
-           ((report.complete && v.threshold <= still) || v.frozen);
+  // Still: nothing moved, nothing came in, nothing is recorded or played.
+  // Then a complete frame (or a frozen selection) is drawn again only for an
+  // event; an incomplete one also when the scene's loads (or detections)
+  // bring something new, unless the next frame draws more anyway (or the
+  // threshold is still relaxed after the motion).
+  const bool at_rest = v.options.idle_wait_seconds > 0 && quiet && !v.recording && !playing &&
+                       v.drawn_camera && same_camera(*v.drawn_camera, camera);
+  const bool relaxed = v.threshold > still;
+  if (at_rest && ((report.complete && !relaxed) || v.frozen)) {
+    v.idle = Idle::complete;
+  } else if (at_rest && !relaxed && !report.draws_more) {
+    v.idle = Idle::waiting;
+  } else {
+    v.idle = Idle::no;
+  }
   v.drawn_camera = camera;
 
-  if (v.index > 0) {
-    v.frame_ms.push_back(dt * 1e3);
-    v.recent_ms.push_back(dt * 1e3);
-    if (v.recent_ms.size() > kRecentFrames) v.recent_ms.pop_front();
-  }
   if (v.options.collect_frames) {
-    v.frames.push_back({v.index, v.time, v.index > 0 ? dt * 1e3 : 0.0, report.frame_seconds * 1e3,
-                        v.threshold, camera, report.selection.quads, report.draw.triangles,
+    // frame_ms and process_cpu_ms: once the next frame starts.
+    v.frames.push_back({v.index, v.time, 0.0, report.frame_seconds * 1e3, v.threshold, camera,
+                        report.selection.quads, report.draw.triangles,
                         report.draw.triangles_per_pixel(),
                         report.draw.geometry_bytes + report.draw.texture_bytes, report.complete});
     ViewerFrame& f = v.frames.back();
@@ -288,7 +329,6 @@ Result<bool> Viewer::frame() {
       f.marks_reused = report.refine->marks_reused;
       f.quads_reused = report.refine->quads_reused;
     }
-    f.process_cpu_ms = v.index > 0 ? cpu_ms : 0.0;
   }
   if (stream::TileLoader* loader = v.scene->elevation_loader()) {
     const stream::LoaderStats s = loader->stats();

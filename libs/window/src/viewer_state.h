@@ -1,6 +1,7 @@
 #pragma once
 // The viewer's state, shared by its loop (viewer.cpp) and its panels
 // (panels.cpp).
+#include <atomic>
 #include <deque>
 #include <future>
 #include <memory>
@@ -70,8 +71,8 @@ struct Viewer::Impl {
   double threshold = 1;  // this frame's pixel error
   bool frozen = false;   // the LOD panel's "freeze selection"
 
-  std::optional<Clock::TimePoint> start, last;
-  double last_cpu = 0;  // the process's CPU time at `last`, seconds
+  std::optional<Clock::TimePoint> start, last;  // of the session; of the last frame() or frame
+  double last_cpu = 0;                          // the process's CPU time at drawn_start, seconds
   double time = 0;
   std::optional<double> path_end;  // when playback reached the end
   bool quit = false;
@@ -82,13 +83,29 @@ struct Viewer::Impl {
   std::string export_status;       // the Path panel's line
 
   size_t index = 0;
-  size_t skipped = 0;                       // frames not drawn: idle
-  bool idle = false;                        // the last frame: still and complete
+  size_t skipped = 0;  // frames not drawn: idle
+  // After the last frame: draw the next at once (no), or wait for an event
+  // first, the view being still and complete (complete) or still and
+  // waiting for the scene's asynchronous work (waiting: a wake, or
+  // idle_wait_seconds on the clock, draws too).
+  enum class Idle { no, complete, waiting };
+  Idle idle = Idle::no;
+  // The scene's asynchronous work that ended (SceneOptions::on_change), and
+  // whether the window was woken for it since frame() last began a wait
+  // (one empty event per wait is enough). Shared with the loaders' threads.
+  struct Wakeup {
+    std::atomic<uint64_t> changes{0};
+    std::atomic<bool> posted{false};
+  };
+  std::shared_ptr<Wakeup> wakeup = std::make_shared<Wakeup>();
   std::optional<lod::Camera> drawn_camera;  // the last frame's
   uint64_t drawn_events = 0;                // window events when the last frame was drawn
   std::string drawn_export_status;          // export_status then
+  uint64_t drawn_changes = 0;               // wakeup->changes when it started
+  Clock::TimePoint drawn_start;             // when it started, on the clock
+  double waited = 0;  // seconds frame() spent in idle waits since then: not frame time
   std::optional<view::FrameReport> report;  // the last frame's
-  std::vector<double> frame_ms;             // every frame's but the first
+  std::vector<double> frame_ms;             // every frame's period but the last's
   std::deque<double> recent_ms;             // the panels' window
   std::vector<ViewerFrame> frames;
   std::vector<std::string> screenshots;

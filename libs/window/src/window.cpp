@@ -6,6 +6,8 @@
 #include <cstdlib>
 #include <string>
 #include <thread>
+#include <tuple>
+#include <utility>
 
 #define GL_GLEXT_PROTOTYPES 1
 #include <GL/glcorearb.h>
@@ -114,6 +116,15 @@ void on_char(GLFWwindow* w, unsigned int c) {
   ImGui_ImplGlfw_CharCallback(w, c);
 }
 
+// GLFW gives cursor positions in window coordinates (screen units); frames,
+// picking and lenses use framebuffer pixels, more of them on a HiDPI screen.
+std::pair<double, double> to_pixels(GLFWwindow* w, double x, double y) {
+  int ww = 0, wh = 0, fw = 0, fh = 0;
+  glfwGetWindowSize(w, &ww, &wh);
+  glfwGetFramebufferSize(w, &fw, &fh);
+  return cursor_to_pixels(x, y, ww, wh, fw, fh);
+}
+
 void on_mouse_button(GLFWwindow* w, int button, int action, int mods) {
   ++impl_of(w).events;
   ImGui_ImplGlfw_MouseButtonCallback(w, button, action, mods);
@@ -125,7 +136,9 @@ void on_mouse_button(GLFWwindow* w, int button, int action, int mods) {
       action == GLFW_PRESS ? view::InputEvent::Type::mouse_down : view::InputEvent::Type::mouse_up;
   e.button = button_from_glfw(button);
   e.modifiers = modifiers_from_glfw(mods);
-  glfwGetCursorPos(w, &e.x, &e.y);
+  double x = 0, y = 0;
+  glfwGetCursorPos(w, &x, &y);
+  std::tie(e.x, e.y) = to_pixels(w, x, y);
   owner(w).deliver(e);
 }
 
@@ -133,7 +146,7 @@ void on_cursor(GLFWwindow* w, double x, double y) {
   ++impl_of(w).events;
   view::InputEvent e;
   e.type = view::InputEvent::Type::cursor;
-  e.x = x, e.y = y;
+  std::tie(e.x, e.y) = to_pixels(w, x, y);
   owner(w).deliver(e);
 }
 
@@ -260,6 +273,10 @@ void Window::poll_events() {
 
 void Window::wait_events(double seconds) {
   glfwWaitEventsTimeout(seconds);
+}
+
+void Window::wake() {
+  glfwPostEmptyEvent();
 }
 
 uint64_t Window::events() const {

@@ -13,6 +13,7 @@
 //
 // Uses the GL context current on the calling thread; call from that thread only.
 #include <array>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -138,6 +139,10 @@ class TerrainRenderer {
   virtual Result<FrameStats> draw(const lod::View& view, const lod::Selection& selection,
                                   RenderTarget& target, const RenderOptions& options,
                                   const lod::RefinedMesh* refined = nullptr) = 0;
+  // Called on a worker thread each time a texture-layer tile processed on
+  // the CPU for an interactive frame is ready (a later frame draws it).
+  // Set before the first draw().
+  virtual void set_on_processed(std::function<void()> on_processed) = 0;
 };
 
 }  // namespace relief::render

@@ -7,7 +7,9 @@
 // as loads may be in flight) read and decode tiles. Event listeners run on
 // the render thread, in begin_frame(). The workers are named
 // "relief-loader" and may run at a lower CPU priority
-// (LoaderOptions::worker_nice; off by default, the option says why).
+// (LoaderOptions::worker_nice; off by default, the option says why). A
+// worker that ends a load calls LoaderOptions::on_settled (a viewer waiting
+// for tiles wakes up).
 //
 // Priority: each frame's requests (from selection, with view priorities)
 // replace the previous frame's queue; queued tiles no frame wants any more are
@@ -55,6 +57,11 @@ struct LoaderOptions {
   // ASan `relief view` did not complete a still view in 30 s. Not the
   // default until the viewer idles while it waits (docs/streaming.md).
   int worker_nice = 0;
+  // Called on a worker thread each time a load ends (the tile resident,
+  // failed, or dropped again for the budget), after the state change and
+  // outside the loader's lock: what a frame draws may have changed. Must be
+  // thread-safe, quick, and callable until the loader is destroyed.
+  std::function<void()> on_settled = nullptr;
 };
 
 struct LevelUse {

@@ -3,7 +3,9 @@
 // frame every 1/fps seconds of path time, paced on the clock in interactive
 // mode (a frame that takes longer is not made up for: the next one is drawn
 // at once); after the path's end, interactive playback keeps drawing the last
-// camera until a frame is complete or a time limit passes. Reports what a
+// camera until a frame is complete or a time limit passes, each frame once
+// something arrived (Scene::wait_for_change; no sooner than 1/fps after the
+// previous one) rather than the same frame again. Reports what a
 // streaming benchmark needs: frame times, completion after each cut, and the
 // bytes the frames drew against the bytes fetched.
 #include <functional>

@@ -67,6 +67,13 @@ struct SceneOptions {
   // point targets of the tiles each frame shows, drawn over the frame.
   bool detect = false;
   process::DetectorParams detector;
+  // Interactive scenes: called on the thread that finished it each time
+  // asynchronous work ends that a later frame of the same camera may draw:
+  // a tile load of any loader (LoaderOptions::on_settled, after the
+  // loader's own), a texture-layer tile processed on the CPU, a tile's
+  // hints detected. Thread-safe and quick; the
+  // viewer wakes its window with it (docs/viewer.md, "Idle").
+  std::function<void()> on_change;
 };
 
 struct FrameReport {
@@ -84,6 +91,11 @@ struct FrameReport {
   // SceneOptions::detect: hints drawn, and tiles whose hints are still being
   // detected (interactive frames; such a frame is not complete).
   size_t hints = 0, hint_tiles_pending = 0;
+  // The next frame of the same camera may draw more without waiting for
+  // anything (splits fed back, texture-layer composites made in this frame
+  // and maybe more past its processing budget): a loop waiting for
+  // on_change on an incomplete view draws again at once instead.
+  bool draws_more = false;
 };
 
 class Scene {
@@ -106,6 +118,13 @@ class Scene {
   // The next frame does not continue the previous one's motion (a cut in a
   // path, a jump in the viewer): no prefetch between them.
   void cut();
+  // Interactive scenes: the asynchronous work that ended so far (what
+  // SceneOptions::on_change announces), and a wait of at most `seconds` of
+  // real time (a safety timeout) until more did than `seen`; whether it did.
+  // A loop with nothing else to do waits here rather than redraw an
+  // incomplete still view (play_path after the path's end).
+  uint64_t changes() const;
+  bool wait_for_change(uint64_t seen, double seconds) const;
 
   const SceneOptions& options() const;
   // A known path (movie export): every interactive frame also requests, at

@@ -68,8 +68,11 @@ struct HintSet {
 class TargetHints {
  public:
   // `store` must outlive this; single-band (SAR amplitude) stores only.
+  // `on_detected` (may be null) is called on the worker after each tile it
+  // detected (or failed to).
   static Result<std::unique_ptr<TargetHints>> create(const tiles::Store& store,
-                                                     const process::DetectorParams& params);
+                                                     const process::DetectorParams& params,
+                                                     std::function<void()> on_detected = nullptr);
   ~TargetHints();
   TargetHints(const TargetHints&) = delete;
   TargetHints& operator=(const TargetHints&) = delete;

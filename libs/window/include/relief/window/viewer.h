@@ -43,11 +43,17 @@ struct ViewerOptions {
   std::string screenshot_dir = ".";
   bool panels = true;
   bool collect_frames = false;  // keep every frame's record (for --stats)
-  // Idle: once the camera is still and its frame complete (at the still
-  // threshold, or the selection frozen), frame() waits up to this long for
-  // an event instead of drawing, and draws again only when one came (input,
-  // a resize, an exposure) or an export finished. Not while recording (the
-  // path would glide through the pause) or playing a path. 0: always draw.
+  // Idle: once the camera is still (no input, not recording: the path
+  // would glide through the pause; not playing a path), frame() waits up to
+  // this long for an event instead of drawing. A complete frame (at the
+  // still threshold, or the selection frozen) is drawn again only when one
+  // came (input, a resize, an exposure) or an export finished. An
+  // incomplete one also when the scene's asynchronous work brought
+  // something (a tile arrived: its loader wakes the window), or after this
+  // long on the clock (a failed tile is asked for again by a frame); unless
+  // the next frame draws more anyway (FrameReport::draws_more, a threshold
+  // still relaxed after the motion), which it then does at once. 0: always
+  // draw.
   double idle_wait_seconds = 0.25;
   // "Export recorded path" (F10, the Path panel's button): called on a
   // thread of its own with the path recorded so far while frames keep
@@ -59,8 +65,10 @@ struct ViewerOptions {
 // One frame as the statistics see it.
 struct ViewerFrame {
   size_t index = 0;
-  double time = 0;         // seconds since the session started, on the clock
-  double frame_ms = 0;     // since the previous frame's start (1000 / fps)
+  double time = 0;  // seconds since the session started, on the clock
+  // This frame's period: from its start to the next frame's (1000 / fps),
+  // idle waits between them left out; 0 for the last frame (no next one).
+  double frame_ms = 0;
   double draw_ms = 0;      // the scene's frame: selection to the end of drawing
   double pixel_error = 0;  // the threshold used (speed-relaxed)
   lod::Camera camera;
@@ -76,7 +84,8 @@ struct ViewerFrame {
   uint64_t marks_evaluated = 0, marks_reused = 0;
   uint32_t quads_reused = 0;
   // CPU time of the whole process (render, loaders, llvmpipe's threads)
-  // since the previous frame's start: what a frame costs on a shared machine.
+  // over the same period, idle waits included (the loaders work in them):
+  // what a frame costs on a shared machine. 0 for the last frame.
   double process_cpu_ms = 0;
 };
 
@@ -84,7 +93,7 @@ struct ViewerSummary {
   size_t frames = 0;          // drawn
   size_t skipped_frames = 0;  // frame() calls that drew nothing: idle, nothing changed
   double seconds = 0;
-  double p50_frame_ms = 0, p99_frame_ms = 0;  // over every frame but the first
+  double p50_frame_ms = 0, p99_frame_ms = 0;  // of the periods of every frame but the last
   bool complete = false;                      // the last frame
   bool path_finished = false;                 // playback reached the path's end
   std::vector<ViewerFrame> frames_list;       // collect_frames only

@@ -12,7 +12,9 @@
 //
 // Input: GLFW's callbacks translate their events into view::InputEvent and
 // pass them to deliver(), the one path by which input reaches the handler;
-// tests call deliver() with scripted events.
+// tests call deliver() with scripted events. Cursor positions are in
+// framebuffer pixels, as frames and picking are (GLFW reports window
+// coordinates, which differ from them on HiDPI screens).
 #include <functional>
 #include <memory>
 #include <string>
@@ -48,9 +50,12 @@ class Window {
   void deliver(const view::InputEvent& event);
   // Processes the window system's pending events (through deliver()).
   void poll_events();
-  // Waits up to `seconds` for an event, then processes what is pending: an
-  // idle viewer's poll_events().
+  // Waits up to `seconds` for an event or a wake(), then processes what is
+  // pending: an idle viewer's poll_events().
   void wait_events(double seconds);
+  // Ends a wait_events() now or, if none is waiting, the next one at once.
+  // Thread-safe: the scene's loaders call it when a tile arrives.
+  void wake();
   // Events seen so far: input (also what the panels take), resizes,
   // exposures, focus changes and deliver()ed events. A still viewer redraws
   // when it changes.
