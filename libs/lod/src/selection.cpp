@@ -274,8 +274,9 @@ class Selector {
   // There its samples are the finest data (its level error counts only data
   // below it), so its refinement reaches them. The fused store's padding
   // (pipeline/fused_elevation.cpp: the children and neighbours of each
-  // tile's parent) gives such a tile no neighbour two levels finer, so the
-  // restriction never needs to split it (docs/rendering.md).
+  // tile's parent) gives such a tile no tile two levels finer beside it, so
+  // the restriction does not need to split it (docs/rendering.md; where it
+  // would, restrict_levels keeps the finer side coarser).
   bool splittable(const TileKey& key) const {
     if (frozen_.contains(key)) return false;
     if (o_.mode != LodMode::edge_marks || !terrain_.sparse_depth()) return true;
