@@ -34,11 +34,11 @@ PLANET=$(dirname "$OUT")
   --size 1280x960 -o "$PLANET/earth.png"
 # A 6 s H.264 movie from orbit down into the Pyrenees, every frame complete:
 # the Pyrenees pyramid (level 10) fused at draw time into ETOPO5 (level 4),
-# so the descent ends on SRTM detail. Layers of different depths need
-# --lod quads for now (docs/rendering.md).
-"$RELIEF" render "$PLANET/etopo5" --elevation "$OUT" --lod quads --camera 1.5,41.2,150000,0,-35,0 \
+# so the descent ends on SRTM detail (docs/rendering.md, "Layers of
+# different depths").
+"$RELIEF" render "$PLANET/etopo5" --elevation "$OUT" --camera 1.5,41.2,150000,0,-35,0 \
   --size 1280x720 -o "$PLANET/planet-pyrenees.png"
-"$RELIEF" render "$PLANET/etopo5" --elevation "$OUT" --imagery "$PLANET/blue-marble" --lod quads \
+"$RELIEF" render "$PLANET/etopo5" --elevation "$OUT" --imagery "$PLANET/blue-marble" \
   --path data/paths/orbit-to-pyrenees.json --size 960x540 -o "$PLANET/planet-flight.mp4"
 
 SAR=$(dirname "$OUT")/umbra

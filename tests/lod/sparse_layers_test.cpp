@@ -13,10 +13,13 @@
 #include <cmath>
 #include <map>
 #include <random>
+#include <set>
 
 #include "../ingest/built_stores.h"
 #include "../support/test_support.h"
 #include "relief/lod/mesh_evaluator.h"
+#include "relief/lod/refine.h"
+#include "relief/lod/refined_evaluator.h"
 #include "relief/pipeline/fused_elevation.h"
 #include "relief/tiles/full_mesh.h"
 
@@ -179,6 +182,48 @@ TEST(SparseLayers, LevelErrorsBoundTheFullMeshAgainstTheDeepestDataBelow) {
   expect_level_errors_bound(fuse(coarse_layer(), n41, pipeline::FuseMode::First), n41);
 }
 
+// Samples of the deepest data in each selected quad projected against the
+// drawn mesh (`at(quad, lon, lat)`: the mesh point above), those on screen.
+struct Measured {
+  size_t compared = 0, coarse_only = 0;
+  double worst = 0;
+};
+template <class Evaluator, class At>
+Measured measure(const tiles::Store& store, TerrainModel& terrain, const View& view,
+                 const Selection& selection, Evaluator& eval, int per_quad, At at) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> unit(0, 1);
+  Measured m;
+  for (const SelectedQuad& q : selection.quads) {
+    const geo::GeoBox b = q.key.bounds();
+    for (int n = 0; n < per_quad; ++n) {
+      const auto s = deepest_sample(store, terrain, b.west + unit(rng) * b.width(),
+                                    b.south + unit(rng) * b.height());
+      if (!s) continue;
+      const SelectedQuad* in = eval.containing(s->lon, s->lat);
+      if (!in || near_data_edge(store, *s, in->key.level)) continue;
+      auto on_mesh = at(*in, s->lon, s->lat);
+      EXPECT_TRUE(on_mesh) << on_mesh.error().message;
+      if (!on_mesh) return m;
+      double ax, ay, bx, by;
+      if (!view.project(ecef(s->lon, s->lat, s->h), ax, ay) || !view.project(*on_mesh, bx, by))
+        continue;
+      if (ax < 0 || ay < 0 || ax >= view.width || ay >= view.height) continue;
+      m.worst = std::max(m.worst, std::hypot(ax - bx, ay - by));
+      ++m.compared;
+      m.coarse_only += s->lat < 42 - 1e-6;  // N42E001 starts at 42N
+    }
+  }
+  return m;
+}
+
+void expect_seen_and_within(const Measured& m, double pixel_error) {
+  EXPECT_GT(m.compared, 1000u);
+  EXPECT_GT(m.coarse_only, 100u) << "the view must see the coarse-only ground";
+  EXPECT_GT(m.compared - m.coarse_only, 100u) << "the view must see the fine layer";
+  EXPECT_LE(m.worst, pixel_error) << "worst " << m.worst << " px over " << m.compared;
+}
+
 void expect_guarantee(pipeline::FuseMode mode) {
   const tiles::Store& store = sparse(mode);
   const MeshTopology mesh(4);
@@ -198,33 +243,11 @@ void expect_guarantee(pipeline::FuseMode mode) {
     }
     EXPECT_GT(below_a_leaf, 0u);
     MeshEvaluator eval(terrain, *selection);
-    std::mt19937 rng(5);
-    std::uniform_real_distribution<double> unit(0, 1);
-    size_t compared = 0, coarse_only = 0;
-    double worst = 0;
-    for (const SelectedQuad& q : selection->quads) {
-      const geo::GeoBox b = q.key.bounds();
-      for (int n = 0; n < 40; ++n) {
-        const auto s = deepest_sample(store, terrain, b.west + unit(rng) * b.width(),
-                                      b.south + unit(rng) * b.height());
-        if (!s) continue;
-        const SelectedQuad* in = eval.containing(s->lon, s->lat);
-        if (!in || near_data_edge(store, *s, in->key.level)) continue;
-        auto on_mesh = eval.mesh_point(*in, s->lon, s->lat);
-        ASSERT_TRUE(on_mesh) << on_mesh.error().message;
-        double ax, ay, bx, by;
-        if (!view->project(ecef(s->lon, s->lat, s->h), ax, ay) || !view->project(*on_mesh, bx, by))
-          continue;
-        if (ax < 0 || ay < 0 || ax >= view->width || ay >= view->height) continue;
-        worst = std::max(worst, std::hypot(ax - bx, ay - by));
-        ++compared;
-        coarse_only += s->lat < 42 - 1e-6;  // N42E001 starts at 42N
-      }
-    }
-    EXPECT_GT(compared, 1000u);
-    EXPECT_GT(coarse_only, 100u) << "the view must see the coarse-only ground";
-    EXPECT_GT(compared - coarse_only, 100u) << "the view must see the fine layer";
-    EXPECT_LE(worst, c.pixel_error) << "worst " << worst << " px over " << compared;
+    expect_seen_and_within(measure(store, terrain, *view, *selection, eval, 40,
+                                   [&](const SelectedQuad& q, double lon, double lat) {
+                                     return eval.mesh_point(q, lon, lat);
+                                   }),
+                           c.pixel_error);
   }
 }
 
@@ -277,18 +300,155 @@ TEST(SparseLayers, SharedVerticesGetIdenticalHeightsWhereTheDataLevelChanges) {
   EXPECT_GT(across_data_levels, 50u);
 }
 
-TEST(SparseLayers, EdgeMarksRefuseLayersOfDifferentDepthsInOneLine) {
+// Edge marks (the default LOD) refine each quad's own tile: the selection
+// splits no quad whose tile has no child tile (its children would draw its
+// window), and the padding makes such a tile's children all absent or all
+// present wherever some layer has data. Refined until nothing is wanted
+// split (split feedback, as fused_layers_test).
+struct Refined {
+  Selection selection;
+  RefinedMesh mesh;
+};
+Refined refine_converged(const View& view, TerrainModel& terrain, RefineCache& cache,
+                         double pixel_error) {
+  SelectionOptions o;
+  o.pixel_error = pixel_error;
+  o.mode = LodMode::edge_marks;
+  o.neighbour_indices = true;
+  std::set<geo::TileKey> wanted;
+  o.also_split = [&wanted](const geo::TileKey& key) { return wanted.contains(key); };
+  RefineOptions ro;
+  ro.pixel_error = pixel_error;
+  ro.cache = &cache;
+  Refined out;
+  for (int round = 0; round < 6; ++round) {
+    auto selection = select_quads(view, terrain, o);
+    EXPECT_TRUE(selection) << selection.error().message;
+    if (!selection) return {};
+    auto mesh = refine(view, terrain, *selection, ro);
+    EXPECT_TRUE(mesh) << mesh.error().message;
+    if (!mesh) return {};
+    out = {std::move(*selection), std::move(*mesh)};
+    if (out.mesh.stats.split_wanted.empty()) break;
+    wanted.insert(out.mesh.stats.split_wanted.begin(), out.mesh.stats.split_wanted.end());
+  }
+  return out;
+}
+
+bool has_child_tile(const tiles::Store& store, const geo::TileKey& key) {
+  for (int c = 0; c < 4; ++c) {
+    if (store.has_tile(key.child(c & 1, c >> 1))) return true;
+  }
+  return false;
+}
+
+TEST(SparseLayers, EveryTileHasNoChildOrEveryChildWithData) {
+  const tiles::Store& store = sparse(pipeline::FuseMode::First);
+  const tiles::Store& fine = fine_layer();
+  const tiles::Store& coarse = coarse_layer();
+  auto has_data = [](const tiles::Store& layer, const geo::TileKey& key) {
+    const int m = std::max(0, key.level - layer.manifest().max_level);
+    return layer.has_tile({key.level - m, key.x >> m, key.y >> m});
+  };
+  size_t padded = 0;  // children below the coarse layer's finest, not in the fine layer
+  for (int level = 0; level < store.manifest().max_level; ++level) {
+    for (const tiles::IndexEntry& e : store.index(level).entries()) {
+      if (!has_child_tile(store, e.key)) continue;
+      bool upsampled = false;
+      for (int c = 0; c < 4; ++c) {
+        const geo::TileKey child = e.key.child(c & 1, c >> 1);
+        const bool data = has_data(fine, child) || has_data(coarse, child);
+        EXPECT_EQ(store.has_tile(child), data) << child.to_string();
+        upsampled |= data && !fine.has_tile(child) && level + 1 > coarse.manifest().max_level;
+      }
+      padded += upsampled;
+    }
+  }
+  EXPECT_GT(padded, 5u);
+}
+
+void expect_refined_guarantee(pipeline::FuseMode mode) {
+  const tiles::Store& store = sparse(mode);
+  const MeshTopology mesh(4);
+  TerrainModel terrain(&store, mesh, uint64_t{512} << 20);
+  RefineCache cache(uint64_t{1} << 30);
+  for (const Case& c : kCases) {
+    auto view = make_view(c.camera);
+    ASSERT_TRUE(view);
+    SCOPED_TRACE(&c - kCases);
+    Refined r = refine_converged(*view, terrain, cache, c.pixel_error);
+    ASSERT_FALSE(r.selection.quads.empty());
+    EXPECT_EQ(r.mesh.stats.too_coarse, 0u);
+    // What stays wanted split is a tile without children next to a finer
+    // quad (docs/rendering.md: diamonds on that side cannot be split).
+    EXPECT_LE(r.mesh.stats.unresolved, 8u);
+    for (const geo::TileKey& k : r.mesh.stats.split_wanted) {
+      EXPECT_TRUE(store.has_tile(k) && !has_child_tile(store, k)) << k.to_string();
+    }
+    size_t leaves = 0;  // quads on a tile without children above the finest level
+    for (const SelectedQuad& q : r.selection.quads) {
+      ASSERT_FALSE(terrain.draws_ancestor(q.key)) << q.key.to_string();
+      leaves += store.has_tile(q.key) && q.key.level < store.manifest().max_level &&
+                !has_child_tile(store, q.key);
+    }
+    EXPECT_GT(leaves, 0u) << "the view must reach the coarse layer's finest tiles";
+    RefinedEvaluator eval(terrain, r.selection, r.mesh);
+    expect_seen_and_within(
+        measure(store, terrain, *view, r.selection, eval, 1500,
+                [&](const SelectedQuad& q, double lon, double lat) -> Result<Vec3> {
+                  auto p = RELIEF_TRY(eval.point(q, lon, lat));
+                  if (!p) return fail("no triangle of " + q.key.to_string());
+                  return *p;
+                }),
+        c.pixel_error);
+  }
+}
+
+TEST(SparseLayers, RefinedMeshesKeepTheGuaranteeFirstValid) {
+  expect_refined_guarantee(pipeline::FuseMode::First);
+}
+
+TEST(SparseLayers, RefinedMeshesKeepTheGuaranteeMean) {
+  expect_refined_guarantee(pipeline::FuseMode::Blend);
+}
+
+// No cracks with edge marks either: every grid vertex of a refined triangle
+// shared by two quads (of equal or different levels, on tiles of the fine
+// layer, the padding or the coarse layer) gets bit-identical heights.
+TEST(SparseLayers, RefinedMeshesShareBitIdenticalVerticesWhereTheFineLayerEnds) {
   const tiles::Store& store = sparse(pipeline::FuseMode::First);
   const MeshTopology mesh(4);
-  TerrainModel terrain(&store, mesh, uint64_t{64} << 20);
-  auto view = make_view(kCases[0].camera);
-  ASSERT_TRUE(view);
-  SelectionOptions o;
-  o.mode = LodMode::edge_marks;
-  auto selection = select_quads(*view, terrain, o);
-  ASSERT_FALSE(selection);
-  EXPECT_NE(selection.error().message.find("--lod quads"), std::string::npos);
-  EXPECT_EQ(selection.error().message.find('\n'), std::string::npos);
+  TerrainModel terrain(&store, mesh, uint64_t{512} << 20);
+  RefineCache cache(uint64_t{1} << 30);
+  size_t across_levels = 0;
+  for (const Case& c : kCases) {
+    auto view = make_view(c.camera);
+    ASSERT_TRUE(view);
+    const Refined r = refine_converged(*view, terrain, cache, c.pixel_error);
+    RefinedEvaluator eval(terrain, r.selection, r.mesh);
+    const int n = 1 << r.mesh.grid_k;
+    std::map<std::pair<double, double>, std::pair<double, size_t>> seen;  // height, quad
+    size_t shared = 0;
+    for (size_t qi = 0; qi < r.selection.quads.size(); ++qi) {
+      const SelectedQuad& q = r.selection.quads[qi];
+      const RefinedQuad& rq = r.mesh.quads[qi];
+      for (uint32_t i = rq.first_index; i < rq.first_index + rq.index_count; ++i) {
+        const GridPos p = eval.pos(r.mesh.indices[i]);
+        if (!(p.x == 0 || p.y == 0 || p.x == 2 * n || p.y == n)) continue;
+        const auto h = eval.height(q, p);
+        ASSERT_TRUE(h) << h.error().message;
+        auto [it, fresh] = seen.try_emplace(eval.lonlat(q, p), *h, qi);
+        if (fresh || it->second.second == qi) continue;
+        ++shared;
+        const SelectedQuad& other = r.selection.quads[it->second.second];
+        across_levels += other.key.level != q.key.level;
+        ASSERT_EQ(it->second.first, *h) << q.key.to_string() << " and " << other.key.to_string()
+                                        << " at " << it->first.first << "," << it->first.second;
+      }
+    }
+    EXPECT_GT(shared, 1000u);
+  }
+  EXPECT_GT(across_levels, 50u);
 }
 
 }  // namespace

@@ -228,7 +228,8 @@ TEST_F(SceneTest, FusedLayersRefineWithDiamondErrorsOfTheFusedTiles) {
 // layer three levels short, with N42E001 at its finest inside it. Interactive
 // frames, which draw only resident tiles and take the quads' exact errors
 // from the loader's threads, converge to the complete frame's quads, sides
-// and corners; edge marks refuse the store in one line.
+// and corners; with edge marks (diamond errors prepared on the loader's
+// threads), to the complete frame's refined mesh.
 TEST_F(SceneTest, LayersOfDifferentDepthsConvergeToTheCompleteFrame) {
   ingest::BuildOptions fine;
   fine.inputs = {testing::data("srtm/N42E001.hgt.zip")};
@@ -275,11 +276,31 @@ TEST_F(SceneTest, LayersOfDifferentDepthsConvergeToTheCompleteFrame) {
   }
   EXPECT_GT(by_data, 0u);
 
-  auto edge_marks = scene(false, lod::LodMode::edge_marks, &*fused);
-  ASSERT_TRUE(edge_marks);
-  auto refused = edge_marks->draw(seam, *target_);
-  ASSERT_FALSE(refused);
-  EXPECT_NE(refused.error().message.find("--lod quads"), std::string::npos);
+  auto refining = scene(true, lod::LodMode::edge_marks, &*fused);
+  ASSERT_TRUE(refining);
+  uint64_t measured = 0, prepared = 0;
+  last.reset();
+  for (int frame = 0; frame < 64 && !(last && last->complete); ++frame) {
+    if (frame > 0) wait_idle(*refining);
+    auto f = refining->draw(seam, *target_);
+    ASSERT_TRUE(f) << f.error().message;
+    measured += f->refine->tiles_measured;
+    prepared += f->refine->tiles_prepared;
+    last = *f;
+  }
+  ASSERT_TRUE(last && last->complete);
+  EXPECT_EQ(measured, 0u);
+  EXPECT_GT(prepared, 4u);
+  auto refined = scene(false, lod::LodMode::edge_marks, &*fused);
+  ASSERT_TRUE(refined);
+  ASSERT_TRUE(refined->draw(seam, *target_));
+  EXPECT_EQ(quads(refining->last_selection()), quads(refined->last_selection()));
+  ASSERT_TRUE(refining->last_refined() && refined->last_refined());
+  EXPECT_EQ(refining->last_refined()->indices, refined->last_refined()->indices);
+  lod::TerrainModel& terrain = refined->terrain();
+  for (const lod::SelectedQuad& q : refined->last_selection().quads) {
+    EXPECT_FALSE(terrain.draws_ancestor(q.key)) << q.key.to_string();
+  }
 }
 
 // A selection coarser than the refinement needs (quads stop splitting when

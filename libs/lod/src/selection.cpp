@@ -258,7 +258,7 @@ class Selector {
     bool split = leaf.visible && key.level < deepest() &&
                  (leaf.error_pixels > o_.pixel_error || leaf.split_for_samples ||
                   (view_ && o_.also_split && o_.also_split(key)));
-    if (split) split = RELIEF_TRY(children_available(key));
+    if (split) split = splittable(key) && RELIEF_TRY(children_available(key));
     if (!split) {
       leaves_.set(key, leaf);
       if (added) added->push_back(key);
@@ -266,6 +266,24 @@ class Selector {
     }
     for (int c = 0; c < 4; ++c) RELIEF_CHECK(visit(key.child(c & 1, c >> 1), added));
     return {};
+  }
+
+  // Edge marks refine a quad's own tile (its diamond errors, its sides shared
+  // with coarser quads): over a store of sparse depth, a quad whose tile has
+  // no child tile is not split, since its children would draw its window.
+  // There its samples are the finest data (its level error counts only data
+  // below it), so its refinement reaches them. The fused store's padding
+  // (pipeline/fused_elevation.cpp: the children and neighbours of each
+  // tile's parent) gives such a tile no tile two levels finer beside it, so
+  // the restriction does not need to split it (docs/rendering.md; where it
+  // would, restrict_levels keeps the finer side coarser).
+  bool splittable(const TileKey& key) const {
+    if (frozen_.contains(key)) return false;
+    if (o_.mode != LodMode::edge_marks || !terrain_.sparse_depth()) return true;
+    for (int c = 0; c < 4; ++c) {
+      if (terrain_.draws_ancestor(key.child(c & 1, c >> 1))) return false;
+    }
+    return true;
   }
 
   // Edge marks refine inside quads down to every sample: no virtual levels.
@@ -324,9 +342,10 @@ class Selector {
           const std::optional<TileKey> coarse = leaf_containing(*n);
           if (coarse && coarse->level < key.level - 1) {
             const TileKey victim = *coarse;
-            if (!RELIEF_TRY(children_available(victim))) {
+            if (!splittable(victim) || !RELIEF_TRY(children_available(victim))) {
               // Interactive: the coarse side has no finer data yet, so the
-              // fine side comes back up; everything is checked again.
+              // fine side comes back up; everything is checked again. (Not
+              // splittable: should the padding not hold, the same.)
               RELIEF_CHECK(coarsen(*key.parent()));
               work.clear();
               leaves_.for_each([&](const TileKey& k, const Leaf&) { work.push_back(k); });
@@ -491,11 +510,6 @@ Result<Selection> restricted_quadtree(TerrainModel& terrain,
 
 Result<Selection> select_quads(const View& view, TerrainModel& terrain,
                                const SelectionOptions& options) {
-  if (options.mode == LodMode::edge_marks && terrain.sparse_depth()) {
-    return fail(
-        "elevation layers of different depths are drawn with --lod quads only (the edge-mark "
-        "refinement below a coarse layer's finest tiles is not done)");
-  }
   const auto start = std::chrono::steady_clock::now();
   Selector s(view, terrain, options);
   RELIEF_CHECK(s.run());

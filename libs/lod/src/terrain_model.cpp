@@ -97,7 +97,16 @@ int TerrainModel::data_level(const geo::TileKey& key) const {
   if (!sparse_) return top;
   for (int level = top; level >= 0; --level) {
     const int m = key.level - level;
-    if (store_->has_tile({level, key.x >> m, key.y >> m})) return level;
+    const geo::TileKey a{level, key.x >> m, key.y >> m};
+    if (!store_->has_tile(a)) continue;
+    if (level == top) return level;
+    // The deepest tile above the quad: its data goes on below it where it
+    // has no child tile; a tile with children has every child where some
+    // layer has data (pipeline/fused_elevation.cpp), so not this one: no data.
+    for (int c = 0; c < 4; ++c) {
+      if (store_->has_tile(a.child(c & 1, c >> 1))) return top;
+    }
+    return level;
   }
   return top;  // no data at all: height 0, like a quad of the data's level
 }

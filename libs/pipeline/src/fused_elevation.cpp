@@ -218,11 +218,17 @@ tiles::SampleStats pooled_stats(const std::vector<ElevationLayer>& layers) {
 }
 
 // The tiles of the fused store, per level (index = level). With layers of
-// different depths (sparse depth, docs/rendering.md), a quad without a tile
-// draws its deepest ancestor tile, so data levels change where the finer
-// layer ends; the fused store also holds the eight neighbours of the parent
-// of each tile (where some layer has data), so two touching quads never draw
-// data more than one level apart and each side can take the coarser one.
+// different depths (sparse depth, docs/rendering.md), a quad below a tile
+// without children draws that tile's window, so data levels change where the
+// finer layer ends. The fused store therefore also holds, where some layer
+// has data (upsampled coarse data where the fine layer has none):
+// - the four children of the parent of each tile, so a tile has no child or
+//   every child with data (a missing one has none): edge-mark refinement
+//   splits a quad only into children with tiles of their own;
+// - the eight neighbours of the parent of each tile, so two touching quads
+//   never draw data more than one level apart and each side can take the
+//   coarser one, and a restricted quadtree never splits a tile without
+//   children.
 std::vector<std::vector<geo::TileKey>> tile_keys(const Layers& layers,
                                                  const tiles::Manifest& manifest) {
   std::vector<std::set<geo::TileKey>> sets(static_cast<size_t>(manifest.max_level) + 1);
@@ -233,15 +239,17 @@ std::vector<std::vector<geo::TileKey>> tile_keys(const Layers& layers,
       }
     }
   }
+  auto add = [&](const std::optional<geo::TileKey>& key) {
+    if (key && layers.has_data(*key)) sets[static_cast<size_t>(key->level)].insert(*key);
+  };
   for (int level = manifest.max_level; manifest.sparse_depth && level > manifest.min_level;
        --level) {
-    for (const geo::TileKey& key : sets[static_cast<size_t>(level)]) {
+    std::set<geo::TileKey>& here = sets[static_cast<size_t>(level)];
+    for (const geo::TileKey& key : std::vector<geo::TileKey>(here.begin(), here.end())) {
       const geo::TileKey parent = *key.parent();
+      for (int c = 0; c < 4; ++c) add(parent.child(c & 1, c >> 1));
       for (int dy = -1; dy <= 1; ++dy) {
-        for (int dx = -1; dx <= 1; ++dx) {
-          const auto n = parent.neighbour(dx, dy);
-          if (n && layers.has_data(*n)) sets[static_cast<size_t>(level - 1)].insert(*n);
-        }
+        for (int dx = -1; dx <= 1; ++dx) add(parent.neighbour(dx, dy));
       }
     }
   }
@@ -251,11 +259,12 @@ std::vector<std::vector<geo::TileKey>> tile_keys(const Layers& layers,
 }
 
 // Geometric errors where the finest data is not at one level: below a tile
-// with fewer than four child tiles, the data is that tile's (a leaf there).
-// Each level's leaves are compared with every ancestor as the finest level's
-// tiles are (tiles/geometric_error.h), and a tile's error is the largest it
-// gets from any level (comparing a partial leaf's whole tile only adds
-// distances to data that is not the finest: still an upper bound).
+// without child tiles, the data is that tile's (a leaf). Each level's leaves
+// are compared with every ancestor as the finest level's tiles are
+// (tiles/geometric_error.h), and a tile's error is the largest it gets from
+// any level. Tiles with one to three children count as leaves too (their
+// missing children have no data: comparing their whole tile only adds
+// distances to samples that are not the finest, still an upper bound).
 Status sparse_geometric_errors(std::vector<tiles::LevelIndex>& indices,
                                const tiles::TileShape& shape, const tiles::BorderedTileReader& read,
                                Executor& executor) {

@@ -64,8 +64,9 @@ class TerrainModel {
   // The data tile and window of quad `key`; at or above the store's finest
   // level the tile is the quad itself. Stores of sparse depth
   // (Manifest::sparse_depth, fused layers of different depths): the quad's
-  // tile, or else its deepest ancestor tile (where a tile has no child, its
-  // data goes on below it).
+  // tile, or else its deepest ancestor tile if that has no child tile (where
+  // a tile has no child, its data goes on below it; a tile with children has
+  // them wherever there is data, so below a missing one there is none).
   DataWindow window(const geo::TileKey& key) const;
   // The window of the quad's parent data, for vertices on sides shared with a
   // coarser quad: the parent's tile (or, beyond the store, the same tile).
@@ -73,7 +74,7 @@ class TerrainModel {
   // with quads of coarser data.
   DataWindow parent_window(const geo::TileKey& key) const;
   // The level of the data quad `key` draws (window()'s tile's): its own level
-  // up to the store's finest; for sparse depth the deepest ancestor tile's.
+  // up to the store's finest; for sparse depth the ancestor tile's it draws.
   int data_level(const geo::TileKey& key) const;
   // Whether the quad draws a window of an ancestor tile (beyond the finest
   // level, or below a leaf of a store of sparse depth), not a tile of its own.
