@@ -11,7 +11,7 @@ const char* const kElevationOptionsHelp =
   --elevation-op OP  smooth the (fused) heights when read: mean, gauss or median
                      (the operators valid for heights); repeat for a chain,
                      applied in the order given; its radii must fit the
-                     store's border (8 samples of the default 9)
+                     store's border less 2 (7 samples of the default 9)
   --elevation-param K=V  a parameter of the --elevation-op before it (the
                      finest level's; coarser levels scale masks to the same
                      ground size)

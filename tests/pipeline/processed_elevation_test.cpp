@@ -49,13 +49,16 @@ bool same(float a, float b) {
   return std::memcmp(&a, &b, sizeof a) == 0;
 }
 
-// Every tile of `drawn` (border 1) holds the samples of `offline`'s tile
+// The border processed tiles keep (what the hillshade reads beyond an edge).
+constexpr int kKept = 2;
+
+// Every tile of `drawn` (border kKept) holds the samples of `offline`'s tile
 // (its wider border cropped) bit for bit, and the index entries agree:
 // bounds, and the geometric errors of the processed pyramid.
 void expect_same_store(const tiles::Store& drawn, const tiles::Store& offline) {
-  ASSERT_EQ(drawn.manifest().border, 1);
+  ASSERT_EQ(drawn.manifest().border, kKept);
   ASSERT_EQ(drawn.manifest().max_level, offline.manifest().max_level);
-  const int b = offline.manifest().border - 1;
+  const int b = offline.manifest().border - kKept;
   size_t tiles = 0, errors = 0;
   for (int level = 0; level <= offline.manifest().max_level; ++level) {
     ASSERT_EQ(drawn.index(level).size(), offline.index(level).size()) << "level " << level;
@@ -119,11 +122,14 @@ TEST(ProcessedElevation, ALensMergesPerSampleAndNeighboursAgreeOnItsBorder) {
   pipeline::ElevationProcessing p;
   p.chain = chain({{"mean", {"radius=1"}}});
   p.lenses.push_back(
-      {1.42, 42.53, 9000, chain({{"gauss", {"radius=6"}}, {"median", {"radius=2"}}})});
+      {1.42, 42.53, 9000, chain({{"gauss", {"radius=5"}}, {"median", {"radius=2"}}})});
   auto drawn = processed(n42, p);
   ASSERT_TRUE(drawn) << drawn.error().message;
   const geo::TileGrid& grid = n42.grid();
-  const int b = grid.border(), w = grid.width(), h = grid.height();
+  // The chains' reference keeps one sample around what it takes as the
+  // interior: given one sample less of border, the kept border.
+  const int b = grid.border() - (kKept - 1), w = grid.width(), h = grid.height();
+  const int pw = w + 2 * kKept, ph = h + 2 * kKept;
   const int max_level = n42.manifest().max_level;
   const auto& s = n42.manifest().stats;
   const process::GlobalStats stats{s.min, s.max, s.mean, s.stddev};
@@ -138,11 +144,13 @@ TEST(ProcessedElevation, ALensMergesPerSampleAndNeighboursAgreeOnItsBorder) {
       auto lens = gpuprocess::run_chain_cpu(gpuprocess::scale_chain(p.lenses[0].chain, factor),
                                             in.raster, b, &stats, ex);
       ASSERT_TRUE(global && lens);
-      for (int y = 0; y < h + 2; ++y) {
-        for (int x = 0; x < w + 2; ++x) {
-          const size_t i = static_cast<size_t>(y) * (w + 2) + x;
-          const bool in_lens = pipeline::lens_distance_m(1.42, 42.53, grid.sample_lon(e.key, x - 1),
-                                                         grid.sample_lat(e.key, y - 1)) <= 9000;
+      ASSERT_EQ(out.raster.width(), pw);
+      for (int y = 0; y < ph; ++y) {
+        for (int x = 0; x < pw; ++x) {
+          const size_t i = static_cast<size_t>(y) * pw + x;
+          const bool in_lens =
+              pipeline::lens_distance_m(1.42, 42.53, grid.sample_lon(e.key, x - kKept),
+                                        grid.sample_lat(e.key, y - kKept)) <= 9000;
           const float want = in_lens ? lens->f32()[i] : global->f32()[i];
           ASSERT_TRUE(same(out.raster.f32()[i], want))
               << e.key.to_string() << " sample " << x << "," << y << (in_lens ? " in" : " out");
@@ -158,8 +166,9 @@ TEST(ProcessedElevation, ALensMergesPerSampleAndNeighboursAgreeOnItsBorder) {
   EXPECT_GT(outside, 100000u);
   EXPECT_GT(lens_differs, inside / 2);
 
-  // Neighbours (east and south) share two columns or rows: each one's border
-  // is the other's edge interior, bit for bit, where the circle crosses them.
+  // Neighbours (east and south) share 2 kKept columns or rows: each one's
+  // border is the other's edge interior, bit for bit, where the circle
+  // crosses them.
   size_t crossed = 0;
   for (int level = max_level - 3; level <= max_level; ++level) {
     for (const tiles::IndexEntry& e : drawn->index(level).entries()) {
@@ -168,22 +177,25 @@ TEST(ProcessedElevation, ALensMergesPerSampleAndNeighboursAgreeOnItsBorder) {
         const auto n = e.key.neighbour(dx, dy);
         if (!n || !drawn->has_tile(*n)) continue;
         const tiles::Tile c = must_read(*drawn, *n);
-        const int len = dx ? h + 2 : w + 2;
+        const int len = dx ? ph : pw;
         bool in_seen = false, out_seen = false;
-        for (int k = 1; k + 1 < len; ++k) {
-          // (a's sample, c's sample) at the same place: a's last interior and
-          // c's west/north border, a's east/south border and c's first interior.
-          for (const auto& [ai, ci] :
-               {std::pair{dx ? w : h, 0}, std::pair{dx ? w + 1 : h + 1, 1}}) {
+        for (int k = kKept; k + kKept < len; ++k) {
+          // a's sample at w + j (its last interiors, then its east or south
+          // border) is c's at j (its west or north border, then its first
+          // interiors).
+          for (int j = 0; j < 2 * kKept; ++j) {
+            const int ai = (dx ? w : h) + j, ci = j;
             const size_t ia =
-                dx ? static_cast<size_t>(k) * (w + 2) + ai : static_cast<size_t>(ai) * (w + 2) + k;
+                dx ? static_cast<size_t>(k) * pw + ai : static_cast<size_t>(ai) * pw + k;
             const size_t ic =
-                dx ? static_cast<size_t>(k) * (w + 2) + ci : static_cast<size_t>(ci) * (w + 2) + k;
+                dx ? static_cast<size_t>(k) * pw + ci : static_cast<size_t>(ci) * pw + k;
             ASSERT_TRUE(same(a.raster.f32()[ia], c.raster.f32()[ic]))
-                << e.key.to_string() << " and " << n->to_string() << " at " << k;
+                << e.key.to_string() << " and " << n->to_string() << " at " << k << ", " << j;
           }
-          const double lon = dx ? grid.sample_lon(e.key, w - 0.5) : grid.sample_lon(e.key, k - 1);
-          const double lat = dx ? grid.sample_lat(e.key, k - 1) : grid.sample_lat(e.key, h - 0.5);
+          const double lon =
+              dx ? grid.sample_lon(e.key, w - 0.5) : grid.sample_lon(e.key, k - kKept);
+          const double lat =
+              dx ? grid.sample_lat(e.key, k - kKept) : grid.sample_lat(e.key, h - 0.5);
           (pipeline::lens_distance_m(1.42, 42.53, lon, lat) <= 9000 ? in_seen : out_seen) = true;
         }
         crossed += in_seen && out_seen;
@@ -206,7 +218,8 @@ TEST(ProcessedElevation, BadChainsAndLensesAreOneLineErrors) {
       {chain({{"linear", {}}}), {}, "operator linear expects"},
       {chain({{"ext-schlick", {}}}), {}, "operator ext-schlick expects"},
       {chain({{"median", {"radius=9"}}}), {}, "median: needs a 9-sample margin"},
-      {chain({{"gauss", {"radius=5"}}, {"mean", {"radius=4"}}}), {}, "mean: needs a 4-sample"},
+      {chain({{"median", {"radius=8"}}}), {}, "more than the 7 of the store's 9-sample overlap"},
+      {chain({{"gauss", {"radius=5"}}, {"mean", {"radius=3"}}}), {}, "mean: needs a 3-sample"},
       {{}, {{1.5, 42.5, 0, {}}}, "elevation lens radius must be > 0 m, not 0"},
       {{}, {{1.5, 42.5, -5, chain({{"mean", {}}})}}, "elevation lens radius must be > 0 m"},
       {{}, {{1.5, 42.5, 500, chain({{"frost", {}}})}}, "(elevation lens): operator frost"},

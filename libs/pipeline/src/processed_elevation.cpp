@@ -21,6 +21,11 @@ namespace {
 
 using RasterPtr = std::shared_ptr<const tiles::Raster>;
 
+// The border the processed tiles keep: the hillshade's slope reads heights
+// one sample beyond a tile's edge, bilinearly (libs/render/src/shaders.h), so
+// two samples shade the tiles' edges as the input's border does.
+constexpr int kKeptBorder = 2;
+
 // As the texture layers' lens pass (gpuprocess/composite.cpp) and
 // view::lens_distance_m.
 constexpr double kMetresPerDegree = 6378137.0 * std::numbers::pi / 180;
@@ -37,7 +42,7 @@ struct Processing {
   // lossless, so the decoded samples are the processed ones.
   tiles::CodecOptions codec{tiles::Codec::Zstd, 0.0, 90, 1};
 
-  // Which samples of the processed tile at `key` (interior plus the one-sample
+  // Which samples of the processed tile at `key` (interior plus the kept
   // border, `w` x `h`) lie in `lens`: by each sample's own position (its
   // global column wrapped around the globe), so a sample is in or out
   // whichever tile holds it.
@@ -47,13 +52,13 @@ struct Processing {
     const int64_t columns = int64_t{grid.width()} << key.level;
     std::vector<double> lons(static_cast<size_t>(w));
     for (int x = 0; x < w; ++x) {
-      int64_t gx = int64_t{key.x} * grid.width() + x - 1;
+      int64_t gx = int64_t{key.x} * grid.width() + x - kKeptBorder;
       gx = (gx % columns + columns) % columns;
       lons[static_cast<size_t>(x)] = -180.0 + (static_cast<double>(gx) + 0.5) * d;
     }
     std::vector<uint8_t> in(static_cast<size_t>(w) * static_cast<size_t>(h));
     for (int y = 0; y < h; ++y) {
-      const int64_t gy = int64_t{key.y} * grid.height() + y - 1;
+      const int64_t gy = int64_t{key.y} * grid.height() + y - kKeptBorder;
       const double lat = 90.0 - (static_cast<double>(gy) + 0.5) * d;
       for (int x = 0; x < w; ++x) {
         in[static_cast<size_t>(y) * static_cast<size_t>(w) + static_cast<size_t>(x)] =
@@ -63,22 +68,24 @@ struct Processing {
     return in;
   }
 
-  // The processed tile at `key`: its interior and a one-sample border.
+  // The processed tile at `key`: its interior and the kept border. The
+  // chains' CPU reference keeps one sample around what it takes as the
+  // interior: given one sample less of border, it keeps two.
   Result<RasterPtr> processed(const geo::TileKey& key) const {
     const tiles::Tile tile = RELIEF_TRY(input.read_tile(key));
     // Masks keep their size on the ground: level `key.level` is 2^(max -
     // level) times coarser than the finest, for which parameters are given.
     const double factor = std::ldexp(1.0, max_level - key.level);
     InlineExecutor inline_executor;  // one tile per reading thread
-    tiles::Raster out =
-        RELIEF_TRY(gpuprocess::run_chain_cpu(gpuprocess::scale_chain(processing.chain, factor),
-                                             tile.raster, grid.border(), &stats, inline_executor));
+    tiles::Raster out = RELIEF_TRY(
+        gpuprocess::run_chain_cpu(gpuprocess::scale_chain(processing.chain, factor), tile.raster,
+                                  grid.border() - (kKeptBorder - 1), &stats, inline_executor));
     for (const ElevationLens& lens : processing.lenses) {
       const std::vector<uint8_t> in = inside(lens, key, out.width(), out.height());
       if (std::ranges::none_of(in, [](uint8_t v) { return v != 0; })) continue;
       const tiles::Raster l = RELIEF_TRY(
           gpuprocess::run_chain_cpu(gpuprocess::scale_chain(lens.chain, factor), tile.raster,
-                                    grid.border(), &stats, inline_executor));
+                                    grid.border() - (kKeptBorder - 1), &stats, inline_executor));
       const auto src = l.f32();
       const auto dst = out.f32();
       for (size_t i = 0; i < in.size(); ++i) {
@@ -93,7 +100,7 @@ struct Processing {
       return fail(fmt::format("{}: no tile {}", input.root().string(), key.to_string()));
     }
     const RasterPtr r = RELIEF_TRY(processed(key));
-    return tiles::encode_tile(*r, 1, codec);
+    return tiles::encode_tile(*r, kKeptBorder, codec);
   }
 };
 
@@ -188,7 +195,7 @@ class OpenPass {
     if (!tile) return tile;
     const int w = p_.grid.width(), h = p_.grid.height();
     tiles::TileHeader header;
-    header.stats = (*tile)->stats(1, 1, w, h);
+    header.stats = (*tile)->stats(kKeptBorder, kKeptBorder, w, h);
     const tiles::IndexEntry e =
         tiles::index_entry_for(key, header, p_.input.index(key.level).find(key)->file_bytes);
     std::lock_guard lock(mutex_);
@@ -212,6 +219,42 @@ class OpenPass {
   uint64_t count_ = 0;
   double min_ = INFINITY, max_ = -INFINITY, sum_ = 0, sum2_ = 0;
 };
+
+// The chain's margins within the input's border less the kept border, else
+// a one-line error naming the step that overflows.
+Status check_room(const gpuprocess::OperatorChain& chain, int border, const std::string& name) {
+  const int room = border - kKeptBorder;
+  if (room < 0) {
+    return fail(fmt::format("{}: a {}-sample border; processed heights need at least {}", name,
+                            border, kKeptBorder));
+  }
+  int used = 0;
+  for (const gpuprocess::ChainStep& s : chain.steps) {
+    const int m = process::margin_of(*s.op, s.params);
+    used += m;
+    if (used > room) {
+      return fail(fmt::format(
+          "{}: {}: needs a {}-sample margin ({} for the chain so far), more than the {} of the "
+          "store's {}-sample overlap border left after the {} samples the processed heights keep",
+          name, s.op->name, m, used, room, border, kKeptBorder));
+    }
+  }
+  return {};
+}
+
+// Operators valid for heights only: the SAR-only ones named (before the
+// margins: a tone mapping's default radius may be the first thing wrong).
+Status check_kinds(const gpuprocess::OperatorChain& chain, const std::string& name) {
+  for (const gpuprocess::ChainStep& s : chain.steps) {
+    if (s.op->sar_only) {
+      return fail(
+          fmt::format("{}: operator {} expects {}, but the store holds elevation data (heights "
+                      "take mean, gauss or median)",
+                      name, s.op->name, s.op->input));
+    }
+  }
+  return {};
+}
 
 std::string describe(const gpuprocess::OperatorChain& chain) {
   std::string text;
@@ -238,8 +281,8 @@ Status check_elevation_processing(const ElevationProcessing& processing,
     return fail(fmt::format("{}: holds {} data; elevation operators process an elevation store",
                             name, tiles::to_string(manifest.kind)));
   }
-  // check_chain_for refuses the SAR-only operators (every one not valid for
-  // heights), a chain too wide for the border, and checks the statistics.
+  RELIEF_CHECK(check_kinds(processing.chain, name));
+  RELIEF_CHECK(check_room(processing.chain, manifest.border, name));
   RELIEF_CHECK(gpuprocess::check_chain_for(processing.chain, manifest, name));
   for (const ElevationLens& lens : processing.lenses) {
     if (!(lens.radius_m > 0) || !std::isfinite(lens.radius_m)) {
@@ -250,6 +293,8 @@ Status check_elevation_processing(const ElevationProcessing& processing,
       return fail(fmt::format("{}: elevation lens centre {},{} is not a longitude, latitude", name,
                               lens.lon, lens.lat));
     }
+    RELIEF_CHECK(check_kinds(lens.chain, name + " (elevation lens)"));
+    RELIEF_CHECK(check_room(lens.chain, manifest.border, name + " (elevation lens)"));
     RELIEF_CHECK(gpuprocess::check_chain_for(lens.chain, manifest, name + " (elevation lens)"));
   }
   return {};
@@ -271,7 +316,7 @@ Result<tiles::Store> process_elevation(tiles::Store store, const std::string& na
   shared->input = std::move(store);
 
   tiles::Manifest manifest = shared->input.manifest();
-  manifest.border = 1;  // what run_chain_cpu keeps
+  manifest.border = kKeptBorder;
   manifest.codec = shared->codec;
   std::string described = "elevation processed at draw time: " + describe(shared->processing.chain);
   for (const ElevationLens& l : shared->processing.lenses) {

@@ -4,9 +4,10 @@
 // whose tiles go through an operator chain when read, on the reading thread
 // (the tile loader's threads when drawing). Each tile is processed from its
 // own overlap border by the CPU reference of the texture layers' chains
-// (gpuprocess::run_chain_cpu), which keeps a one-sample border: the presented
-// store's border is 1. Lenses: inside a circle on the ellipsoid a sample
-// takes the lens chain's value, outside the global chain's, decided per
+// (gpuprocess::run_chain_cpu) and keeps a two-sample border (what the
+// renderer's hillshade reads beyond a tile's edge): the presented store's
+// border is 2, and a chain's margins may use the rest of the input's. Lenses: inside a circle on
+// the ellipsoid a sample takes the lens chain's value, outside the global chain's, decided per
 // sample by its own position, so the processed heights are one function of
 // position and tiles sharing a side agree there bit for bit.
 //
@@ -43,7 +44,9 @@ struct ElevationProcessing {
 // The operators valid for heights: those of the catalogue not marked SAR-only
 // (mean, gauss, median). Speckle filters, amplitude/intensity/dB conversions
 // and the dynamic-range mappings are refused naming the operator, as a chain
-// wider than the store's border (at its finest level) or a lens radius <= 0.
+// wider than the store's border less the 2 samples kept (7 of the default 9,
+// at the finest level: coarser levels have smaller masks) or a lens radius
+// <= 0.
 // `name` (the store) starts every message.
 Status check_elevation_processing(const ElevationProcessing& processing,
                                   const tiles::Manifest& manifest, const std::string& name);
