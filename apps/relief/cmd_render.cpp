@@ -5,6 +5,7 @@
 
 #include "args.h"
 #include "commands.h"
+#include "elevation_options.h"
 #include "output_safety.h"
 #include "relief/lod/selection.h"
 #include "relief/render/terrain_renderer.h"
@@ -23,6 +24,9 @@ constexpr const char* kHelp =
        relief render [STORE] --texture STORE2 [--texture-op OP [--texture-param K=V]...]...
                      [--texture-range MIN,MAX] [--texture-opacity A] [--texture-colormap NAME]
                      ... (--camera C | --look-at L | --path PATH.json) -o OUT [options]
+       relief render STORE [--elevation STORE3]... --elevation-op OP [--elevation-param K=V]...
+                     [--elevation-lens LON,LAT,RADIUS_M [--elevation-lens-op OP ...]...]
+                     ... -o OUT [options]
 
 Renders an elevation store headless (EGL; Mesa's llvmpipe where there is no
 GPU). The mesh keeps every finest sample within --pixel-error pixels of
@@ -225,13 +229,16 @@ int render_still(const Args& args, RenderSetup& setup) {
 int run_render(const std::vector<std::string>& command_line) {
   if (wants_help(command_line)) {
     std::string help = kHelp;
-    help.replace(help.find("%TEXTURE%"), 9, kTextureOptionsHelp);
+    help.replace(help.find("%TEXTURE%"), 9,
+                 std::string(kElevationOptionsHelp) + kTextureOptionsHelp);
     return print_help(help.c_str());
   }
   // Texture options repeat and their order matters: taken out first.
   std::vector<std::string> argv = command_line;
   auto textures = take_texture_layers(argv);
   if (!textures) return report_error(textures.error().message);
+  auto elevation = take_elevation_processing(argv);
+  if (!elevation) return report_error(elevation.error().message);
   auto args = Args::parse(argv,
                           with_scene_options({{"--output", "-o"},
                                               {"--path"},
@@ -276,9 +283,10 @@ int run_render(const std::vector<std::string>& command_line) {
   }
   if (args->get("--parallel")) {
     if (!textures->layers.empty()) return report_error("--parallel: not with --texture layers yet");
+    if (!elevation->empty()) return report_error("--parallel: not with --elevation-op yet");
     return render_parallel(*args);
   }
-  auto setup = parse_render_setup(*args, std::move(*textures));
+  auto setup = parse_render_setup(*args, std::move(*textures), std::move(*elevation));
   if (!setup) return report_error(setup.error().message);
   if (args->get("--path")) return render_path(*args, *setup);
   return render_still(*args, *setup);

@@ -9,6 +9,7 @@
 
 #include "args.h"
 #include "commands.h"
+#include "elevation_options.h"
 #include "output_safety.h"
 #include "relief/view/path_file.h"
 #include "relief/window/viewer.h"
@@ -24,6 +25,7 @@ namespace {
 constexpr const char* kHelp =
     R"(usage: relief view STORE [--imagery STORE2] [--camera C | --look-at L] [options]
        relief view STORE --play PATH.json [--exit-when-done] [--stats STATS.json]
+       relief view STORE [--elevation-op OP [--elevation-param K=V]...]... [options]
 
 Opens a window (GLFW, OpenGL 4.5 core; Mesa's llvmpipe where there is no GPU)
 and flies over an elevation store. Frames never wait for I/O: they draw what
@@ -281,13 +283,16 @@ int view_session(const Args& args, RenderSetup& setup) {
 int run_view(const std::vector<std::string>& command_line) {
   if (wants_help(command_line)) {
     std::string help = kHelp;
-    help.replace(help.find("%TEXTURE%"), 9, kTextureOptionsHelp);
+    help.replace(help.find("%TEXTURE%"), 9,
+                 std::string(kElevationOptionsHelp) + kTextureOptionsHelp);
     return print_help(help.c_str());
   }
   // The texture layers of `relief render`, parsed the same way.
   std::vector<std::string> argv = command_line;
   auto textures = take_texture_layers(argv);
   if (!textures) return report_error(textures.error().message);
+  auto elevation = take_elevation_processing(argv);
+  if (!elevation) return report_error(elevation.error().message);
   auto args = Args::parse(argv,
                           with_scene_options({{"--mode"},
                                               {"--no-speed-lod", "", false},
@@ -313,7 +318,7 @@ int run_view(const std::vector<std::string>& command_line) {
   if (auto safe = check_view_outputs(*args, textures->paths); !safe) {
     return report_error(safe.error().message);
   }
-  auto setup = parse_render_setup(*args, std::move(*textures));
+  auto setup = parse_render_setup(*args, std::move(*textures), std::move(*elevation));
   if (!setup) return report_error(setup.error().message);
   return view_session(*args, *setup);
 }

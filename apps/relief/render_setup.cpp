@@ -81,7 +81,8 @@ std::vector<OptionSpec> with_scene_options(std::vector<OptionSpec> own) {
   return own;
 }
 
-Result<RenderSetup> parse_render_setup(const Args& args, TextureLayers textures) {
+Result<RenderSetup> parse_render_setup(const Args& args, TextureLayers textures,
+                                       pipeline::ElevationProcessing elevation) {
   const bool textured = !textures.layers.empty();
   if (args.positional().size() > 1 || (args.positional().empty() && !textured)) {
     return fail(textured ? "expected at most one elevation STORE"
@@ -149,8 +150,16 @@ Result<RenderSetup> parse_render_setup(const Args& args, TextureLayers textures)
                                    access, &s.disk_cache));
     s.store =
         RELIEF_TRY(fuse_elevation_options(args, args.positional()[0], std::move(s.store), access));
+    if (!elevation.empty()) {
+      ThreadExecutor executor;
+      const std::string name = s.store.root().string();
+      s.store = RELIEF_TRY(
+          pipeline::process_elevation(std::move(s.store), name, std::move(elevation), executor));
+    }
   } else if (!args.get_all("--elevation").empty()) {
     return fail("--elevation: fuses with an elevation STORE, and none was given");
+  } else if (!elevation.empty()) {
+    return fail("--elevation-op: processes an elevation STORE, and none was given");
   }
   s.disk_cache_budget = access.cache_bytes;
   if (auto path = args.get("--imagery")) {

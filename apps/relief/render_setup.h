@@ -8,6 +8,7 @@
 
 #include "args.h"
 #include "open_store.h"
+#include "relief/pipeline/processed_elevation.h"
 #include "relief/tiles/store.h"
 #include "relief/view/scene.h"
 #include "texture_options.h"
@@ -41,7 +42,10 @@ struct RenderSetup {
 // caches, detector hints.
 std::vector<OptionSpec> with_scene_options(std::vector<OptionSpec> own);
 
-Result<RenderSetup> parse_render_setup(const Args& args, TextureLayers textures = {});
+// `elevation`: the --elevation-op family (take_elevation_processing()),
+// applied to the (fused) elevation store when it is opened.
+Result<RenderSetup> parse_render_setup(const Args& args, TextureLayers textures = {},
+                                       pipeline::ElevationProcessing elevation = {});
 
 // The elevation store, or null (texture layers on the bare ellipsoid).
 inline const tiles::Store* elevation_of(const RenderSetup& s) {

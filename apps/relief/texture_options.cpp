@@ -36,9 +36,28 @@ const char* const kTextureOptionsHelp =
                      0.15 of the maximum) and --sensitivity (default 1.5)
 )";
 
+Result<gpuprocess::OperatorChain> make_chain(const char* option, const OperatorTexts& ops) {
+  gpuprocess::OperatorChain chain;
+  for (const auto& [op, params] : ops) {
+    auto step = gpuprocess::make_step(op, params);
+    if (!step) return fail(fmt::format("{} {}: {}", option, op, step.error().message));
+    chain.steps.push_back(std::move(*step));
+  }
+  return chain;
+}
+
+Result<LensCircle> parse_lens_circle(const char* option, const std::string& text) {
+  auto v = RELIEF_TRY(parse_numbers(option, text, 3));
+  if (!(v[0] >= -180 && v[0] < 360) || !(v[1] >= -90 && v[1] <= 90)) {
+    return fail(fmt::format("{}: {},{} is not a longitude, latitude", option, v[0], v[1]));
+  }
+  if (!(v[2] > 0)) return fail(fmt::format("{}: radius {} m must be > 0", option, v[2]));
+  return LensCircle{v[0] > 180 ? v[0] - 360 : v[0], v[1], v[2]};
+}
+
 namespace {
 
-using Ops = std::vector<std::pair<std::string, std::vector<std::string>>>;
+using Ops = OperatorTexts;
 
 struct LensText {
   std::string where;
@@ -52,24 +71,10 @@ struct LayerText {
   std::vector<LensText> lenses;
 };
 
-Result<gpuprocess::OperatorChain> make_chain(const char* option, const Ops& ops) {
-  gpuprocess::OperatorChain chain;
-  for (const auto& [op, params] : ops) {
-    auto step = gpuprocess::make_step(op, params);
-    if (!step) return fail(fmt::format("{} {}: {}", option, op, step.error().message));
-    chain.steps.push_back(std::move(*step));
-  }
-  return chain;
-}
-
 Result<render::Lens> make_lens(const LensText& t) {
-  auto v = RELIEF_TRY(parse_numbers("--lens", t.where, 3));
-  if (!(v[0] >= -180 && v[0] < 360) || !(v[1] >= -90 && v[1] <= 90)) {
-    return fail(fmt::format("--lens: {},{} is not a longitude, latitude", v[0], v[1]));
-  }
-  if (!(v[2] > 0)) return fail(fmt::format("--lens: radius {} m must be > 0", v[2]));
+  const LensCircle c = RELIEF_TRY(parse_lens_circle("--lens", t.where));
   render::Lens lens;
-  lens.lon = v[0] > 180 ? v[0] - 360 : v[0], lens.lat = v[1], lens.radius_m = v[2];
+  lens.lon = c.lon, lens.lat = c.lat, lens.radius_m = c.radius_m;
   lens.chain = RELIEF_TRY(make_chain("--lens-op", t.ops));
   return lens;
 }

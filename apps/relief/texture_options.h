@@ -32,6 +32,19 @@ struct TextureLayers {
 // one-line errors.
 Result<TextureLayers> take_texture_layers(std::vector<std::string>& argv);
 
+// Operators as given, each with its "key=value" parameters.
+using OperatorTexts = std::vector<std::pair<std::string, std::vector<std::string>>>;
+// The chain of `ops` (unknown operators, parameters out of range: one-line
+// errors starting with `option` and the operator).
+Result<gpuprocess::OperatorChain> make_chain(const char* option, const OperatorTexts& ops);
+
+// A lens's LON,LAT,RADIUS_M (longitude in [-180, 360), normalised to
+// [-180, 180]; radius > 0), errors starting with `option`.
+struct LensCircle {
+  double lon = 0, lat = 0, radius_m = 0;
+};
+Result<LensCircle> parse_lens_circle(const char* option, const std::string& text);
+
 // The help text of the options.
 extern const char* const kTextureOptionsHelp;
 
