@@ -10,7 +10,9 @@
 #include <cmath>
 #include <limits>
 #include <mutex>
+#include <optional>
 #include <set>
+#include <unordered_map>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -25,8 +27,10 @@
 #include "relief/tiles/store.h"
 #include "relief/tiles/store_layout.h"
 #include "source.h"
+#include "task_graph.h"
 #include "void_fill.h"
 #include "warp.h"
+#include "writeback.h"
 
 namespace relief::ingest {
 namespace fs = std::filesystem;
@@ -333,21 +337,20 @@ class Builder {
       report.phase_seconds.emplace_back(phase, std::chrono::duration<double>(now - last).count());
       last = now;
     };
-    RELIEF_CHECK(warp_finest());
-    lap("warp");
-    for (int level = max_level_ - 1; level >= min_level_; --level)
-      RELIEF_CHECK(build_parents(level));
-    lap("pyramid");
+    // Tiles start on their way to the disk as they are written (writeback.h).
+    writeback_.emplace();
+    std::vector<LevelResult> levels = RELIEF_TRY(build_levels());
+    writeback_.reset();
     std::vector<tiles::LevelIndex> indices;
     tiles::SampleStats global;
     for (int level = min_level_; level <= max_level_; ++level) {
-      LevelResult r = RELIEF_TRY(write_level(level));
+      LevelResult& r = levels[static_cast<size_t>(level - min_level_)];
       report.tiles_written += r.written;
       report.tiles_resumed += r.resumed;
       if (level == max_level_) global = combined_stats(std::move(r.tile_stats));
       indices.push_back(std::move(r.index));
     }
-    lap("tiles");
+    lap("warp+pyramid+tiles");
     if (indices.back().size() == 0) {
       return fail(fmt::format("{}: the inputs hold no valid samples (nodata everywhere)",
                               o_.inputs.front()));
@@ -420,103 +423,160 @@ class Builder {
     return sorted;
   }
 
-  Status warp_finest() {
-    const std::string phase = fmt::format("warp-{}", max_level_);
-    if (done(phase)) return {};
-    const auto keys = finest_tiles();
-    std::mutex pool_mutex;
-    std::vector<std::unique_ptr<TileWarper>> pool;  // one warper per concurrent worker
-    SharedDirectSources shared(groups_.size());     // direct-path datasets, read once
-    FirstError error;
-    progress_.begin(fmt::format("warp level {}", max_level_), keys.size());
-    ex_.parallel_for(keys.size(), [&](size_t i) {
-      if (!error.failed() && !cores_.exists(keys[i])) {
-        std::unique_ptr<TileWarper> warper;
-        {
-          std::lock_guard lock(pool_mutex);
-          if (!pool.empty()) {
-            warper = std::move(pool.back());
-            pool.pop_back();
-          }
-        }
-        if (!warper) {
-          warper = std::make_unique<TileWarper>(sources_, groups_, o_.kind, grid_, o_.warp_error,
-                                                o_.direct_resampling, &shared);
-        }
-        auto core = warper->warp(keys[i]);
-        if (core) drop_non_finite(*core);
-        if (!core)
-          error.set(core.error());
-        else if (core->any_valid()) {
-          if (auto st = cores_.write(keys[i], std::move(*core)); !st) error.set(st.error());
-        }
-        std::lock_guard lock(pool_mutex);
-        pool.push_back(std::move(warper));
-      }
-      progress_.advance();
-    });
-    progress_.end();
-    RELIEF_CHECK(error.status());
-    return mark_done(phase, max_level_);
-  }
-
-  Status build_parents(int level) {
-    const std::string phase = fmt::format("pyramid-{}", level);
-    if (done(phase)) return {};
-    std::set<TileKey> parent_set;
-    for (const auto& child : cores_.list(level + 1)) parent_set.insert(*child.parent());
-    const std::vector<TileKey> parents(parent_set.begin(), parent_set.end());
-    FirstError error;
-    progress_.begin(fmt::format("pyramid level {}", level), parents.size());
-    ex_.parallel_for(parents.size(), [&](size_t i) {
-      const TileKey& p = parents[i];
-      if (!error.failed() && !cores_.exists(p)) {
-        std::array<std::shared_ptr<const tiles::Raster>, 4> held;
-        std::array<const tiles::Raster*, 4> children{};
+  // The warp, the pyramid and the tiles as one graph of tasks (task_graph.h):
+  // a parent core is made as soon as its four children exist and a tile is
+  // written as soon as its 3 x 3 neighbourhood of cores exists, so both
+  // workers stay busy across what used to be phase boundaries (while one
+  // reads the sources, the other encodes tiles). Every task is a function of
+  // the inputs alone, so the store does not depend on the order.
+  Result<std::vector<LevelResult>> build_levels() {
+    enum class Kind { Warp, Parent, Tile };
+    struct Job {
+      Kind kind;
+      TileKey key;
+    };
+    // Warps first (they feed everything else), then parents (the pyramid's
+    // top is a chain of single tasks), then tiles.
+    constexpr int kWarpClass = 0, kParentClass = 1, kTileClass = 2;
+    const auto levels = static_cast<size_t>(max_level_ - min_level_ + 1);
+    auto slot = [&](int level) { return static_cast<size_t>(level - min_level_); };
+    TaskGraph graph;
+    std::vector<Job> jobs;
+    // Per level: the cores' keys in task order, and their tasks.
+    std::vector<std::vector<TileKey>> cores(levels);
+    std::vector<std::unordered_map<TileKey, size_t, geo::TileKeyHash>> core_task(levels);
+    auto add_core = [&](Kind kind, int task_class, const TileKey& key) {
+      const size_t id = graph.add(task_class);
+      jobs.push_back({kind, key});
+      cores[slot(key.level)].push_back(key);
+      core_task[slot(key.level)].emplace(key, id);
+      return id;
+    };
+    for (const TileKey& key : finest_tiles()) add_core(Kind::Warp, kWarpClass, key);
+    for (int level = max_level_ - 1; level >= min_level_; --level) {
+      std::set<TileKey> parents;
+      for (const TileKey& child : cores[slot(level + 1)]) parents.insert(*child.parent());
+      for (const TileKey& p : parents) {
+        const size_t id = add_core(Kind::Parent, kParentClass, p);
         for (int c = 0; c < 4; ++c) {
-          auto child = cores_.read(p.child(c % 2, c / 2));
-          if (!child) {
-            error.set(child.error());
-            break;
+          const auto& below = core_task[slot(level + 1)];
+          if (auto it = below.find(p.child(c % 2, c / 2)); it != below.end())
+            graph.depend(id, it->second);
+        }
+      }
+    }
+    for (int level = max_level_; level >= min_level_; --level) {
+      const auto& around = core_task[slot(level)];
+      for (const TileKey& key : cores[slot(level)]) {
+        const size_t id = graph.add(kTileClass);
+        jobs.push_back({Kind::Tile, key});
+        std::set<size_t> prerequisites;
+        for (int dy = -1; dy <= 1; ++dy) {
+          for (int dx = -1; dx <= 1; ++dx) {
+            const auto n = key.neighbour(dx, dy);
+            if (!n) continue;
+            if (auto it = around.find(*n); it != around.end()) prerequisites.insert(it->second);
           }
-          held[static_cast<size_t>(c)] = *child;
-          children[static_cast<size_t>(c)] = child->get();
         }
-        if (!error.failed()) {
-          tiles::Raster core = downsample(children, grid_.width(), grid_.height(), type_);
-          if (auto st = cores_.write(p, std::move(core)); !st) error.set(st.error());
+        for (size_t q : prerequisites) graph.depend(id, q);
+      }
+    }
+
+    // A phase marker per level, once its last core is made (mark_done).
+    std::vector<std::atomic<size_t>> unmade(levels);
+    std::vector<bool> skipped(levels);
+    for (int level = min_level_; level <= max_level_; ++level) {
+      unmade[slot(level)] = cores[slot(level)].size();
+      skipped[slot(level)] = done(phase_name(level));
+    }
+    std::vector<LevelResult> results;
+    for (int level = min_level_; level <= max_level_; ++level)
+      results.push_back({tiles::LevelIndex(level), {}, 0, 0});
+    std::mutex results_mutex;
+    Warpers warpers(groups_.size());
+    FirstError error;
+    progress_.begin(fmt::format("levels {}..{}", max_level_, min_level_), jobs.size());
+    graph.run(ex_, [&](size_t id) {
+      const Job& job = jobs[id];
+      const size_t s = slot(job.key.level);
+      if (!error.failed()) {
+        Status status;
+        if (job.kind == Kind::Tile) {
+          // No core, no tile: the tile would be empty.
+          if (cores_.exists(job.key)) {
+            if (auto tile = write_tile(job.key); !tile) {
+              status = std::unexpected(tile.error());
+            } else {
+              std::lock_guard lock(results_mutex);
+              LevelResult& r = results[s];
+              r.index.add(tile->entry);
+              r.tile_stats.emplace_back(job.key, tile->stats);
+              (tile->resumed ? r.resumed : r.written) += 1;
+            }
+          }
+        } else {
+          if (!skipped[s] && !cores_.exists(job.key)) {
+            status = job.kind == Kind::Warp ? warp_core(job.key, warpers) : parent_core(job.key);
+          }
+          if (status && --unmade[s] == 0)
+            status = mark_done(phase_name(job.key.level), job.key.level);
         }
+        if (!status) error.set(status.error());
       }
       progress_.advance();
     });
     progress_.end();
     RELIEF_CHECK(error.status());
-    return mark_done(phase, level);
+    return results;
   }
 
-  Result<LevelResult> write_level(int level) {
-    const auto keys = cores_.list(level);
+  std::string phase_name(int level) const {
+    return fmt::format("{}-{}", level == max_level_ ? "warp" : "pyramid", level);
+  }
+
+  // One warper per concurrent worker, and the direct path's shared datasets.
+  struct Warpers {
+    explicit Warpers(size_t groups) : shared(groups) {}
     std::mutex mutex;
-    LevelResult result{tiles::LevelIndex(level), {}, 0, 0};
-    FirstError error;
-    progress_.begin(fmt::format("tiles level {}", level), keys.size());
-    ex_.parallel_for(keys.size(), [&](size_t i) {
-      if (!error.failed()) {
-        auto tile = write_tile(keys[i]);
-        if (!tile) {
-          error.set(tile.error());
-        } else {
-          std::lock_guard lock(mutex);
-          result.index.add(tile->entry);
-          result.tile_stats.emplace_back(keys[i], tile->stats);
-          (tile->resumed ? result.resumed : result.written) += 1;
-        }
+    std::vector<std::unique_ptr<TileWarper>> idle;
+    SharedDirectSources shared;  // read once for all workers
+  };
+
+  Status warp_core(const TileKey& key, Warpers& warpers) {
+    std::unique_ptr<TileWarper> warper;
+    {
+      std::lock_guard lock(warpers.mutex);
+      if (!warpers.idle.empty()) {
+        warper = std::move(warpers.idle.back());
+        warpers.idle.pop_back();
       }
-      progress_.advance();
-    });
-    progress_.end();
-    RELIEF_CHECK(error.status());
-    return result;
+    }
+    if (!warper) {
+      warper = std::make_unique<TileWarper>(sources_, groups_, o_.kind, grid_, o_.warp_error,
+                                            o_.direct_resampling, &warpers.shared);
+    }
+    auto core = warper->warp(key);
+    {
+      std::lock_guard lock(warpers.mutex);
+      warpers.idle.push_back(std::move(warper));
+    }
+    if (!core) return std::unexpected(core.error());
+    drop_non_finite(*core);
+    if (!core->any_valid()) return {};
+    return cores_.write(key, std::move(*core));
+  }
+
+  // A parent core from its children; none when all four are empty.
+  Status parent_core(const TileKey& p) {
+    std::array<std::shared_ptr<const tiles::Raster>, 4> held;
+    std::array<const tiles::Raster*, 4> children{};
+    for (size_t c = 0; c < 4; ++c) {
+      held[c] = RELIEF_TRY(cores_.read(p.child(static_cast<int>(c % 2), static_cast<int>(c / 2))));
+      children[c] = held[c].get();
+    }
+    if (std::all_of(children.begin(), children.end(), [](auto* c) { return c == nullptr; }))
+      return {};
+    return cores_.write(p, downsample(children, grid_.width(), grid_.height(), type_));
   }
 
   // A tile as written, before encoding: its core with borders from its neighbours'.
@@ -562,6 +622,7 @@ class Builder {
     const tiles::Raster bordered = RELIEF_TRY(bordered_tile(key));
     auto bytes = RELIEF_TRY(tiles::encode_tile(bordered, grid_.border(), codec_));
     RELIEF_CHECK(tiles::write_tile_file(o_.output, key, bytes));
+    if (writeback_) writeback_->start(path);
     auto header = RELIEF_TRY(tiles::parse_tile_header(bytes, path.string()));
     return WrittenTile{tiles::index_entry_for(key, header, bytes.size()), header.stats, false};
   }
@@ -614,6 +675,7 @@ class Builder {
   tiles::SampleType type_;
   std::vector<MosaicGroup> groups_;
   CoreStore cores_;
+  std::optional<Writeback> writeback_;  // while tiles are written
 };
 
 }  // namespace

@@ -1,7 +1,7 @@
 #pragma once
 // `relief build`: turns rasters GDAL can read into a tile pyramid store.
 //
-// Phases (each parallel over tiles, each resumable after a crash):
+// Steps (each parallel over tiles, each resumable after a crash):
 //  0. voids    with --fill-voids, elevation sources with holes are copied with
 //              the holes filled (void_fill.h)
 //  1. warp     every finest-level tile interior is resampled from the sources
@@ -10,7 +10,10 @@
 //  3. tiles    bordered tiles assembled from the 3 x 3 neighbouring interiors,
 //              so borders equal the neighbours' samples exactly; encoded and
 //              written atomically with per-tile statistics
-//  4. indices and manifest, written last: a store with a manifest is complete.
+//  Steps 1-3 are one graph of tasks on the workers: a parent interior is made
+//  once its four children exist, a tile written once its neighbourhood exists.
+//  4. geometric errors (elevation), indices, and the manifest, written last:
+//     a store with a manifest is complete.
 // Interiors live in <store>/.build until the build finishes.
 #include <cstdint>
 #include <filesystem>
