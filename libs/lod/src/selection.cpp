@@ -171,6 +171,22 @@ class Selector {
     if (missing) terrain_.request(*missing, 0);
   }
 
+  // Requests `tile` at priority `p` and, above it, each of its ancestors that
+  // is not available at twice the priority of the one below: a neighbour's
+  // parent need not be resident or requested (it is not on the way to the
+  // quad being split), and the loader takes the highest priority first, so
+  // ancestors still load first.
+  void request_with_ancestors(const TileKey& tile, double p) {
+    std::vector<TileKey> chain;
+    for (std::optional<TileKey> k = tile; k && !terrain_.available(*k); k = k->parent()) {
+      chain.push_back(*k);
+    }
+    for (const TileKey& k : chain) {
+      terrain_.request(k, p);
+      p *= 2;
+    }
+  }
+
   // Interactive frames draw only resident data: a quad splits only when the
   // data of each of its visible children is available now; the missing ones
   // are requested. Deeper than the store, children draw the same tile.
@@ -226,7 +242,7 @@ class Selector {
         TerrainModel::QuadInfo* info = RELIEF_TRY(terrain_.quad(*n));
         if (outside_frustum(info->box, planes_) || hidden_by_horizon(info->box, info->range))
           continue;
-        terrain_.request(*w.tile, cap * 0.25);
+        request_with_ancestors(*w.tile, cap * 0.25);
       }
     }
     if (key.level + 1 > terrain_.data_max_level()) return {};
