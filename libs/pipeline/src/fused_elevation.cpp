@@ -16,6 +16,8 @@
 #include "relief/tiles/geometric_error.h"
 #include "relief/tiles/store_layout.h"
 
+#include "memory_store.h"
+
 namespace relief::pipeline {
 namespace {
 
@@ -145,41 +147,6 @@ struct Layers {
     if (!r) return fail(fmt::format("tile {} is in none of the layers", key.to_string()));
     return tiles::encode_tile(*r, grid.border(), codec);
   }
-};
-
-// Serves the fused store's files from memory (manifest, level indexes) and
-// fuses its tiles when fetched.
-class FusedSource final : public tiles::StoreSource {
- public:
-  FusedSource(std::string name, std::shared_ptr<const Layers> layers, std::string manifest,
-              std::vector<std::vector<std::byte>> indices)
-      : name_(std::move(name)),
-        layers_(std::move(layers)),
-        manifest_(std::move(manifest)),
-        indices_(std::move(indices)) {}
-
-  std::string name() const override { return name_; }
-
-  Result<std::vector<std::byte>> fetch(const std::string& relative) const override {
-    if (relative == tiles::kManifestName) {
-      const auto* p = reinterpret_cast<const std::byte*>(manifest_.data());
-      return std::vector<std::byte>(p, p + manifest_.size());
-    }
-    for (size_t level = 0; level < indices_.size(); ++level) {
-      if (relative == tiles::level_index_relative_path(static_cast<int>(level))) {
-        return indices_[level];
-      }
-    }
-    const auto key = tiles::tile_key_from_relative_path(relative);
-    if (!key) return fail(fmt::format("{}/{}: no such file", name_, relative));
-    return layers_->encoded(*key);
-  }
-
- private:
-  std::string name_;
-  std::shared_ptr<const Layers> layers_;
-  std::string manifest_;
-  std::vector<std::vector<std::byte>> indices_;
 };
 
 Status check_layer(const tiles::Manifest& first, const ElevationLayer& layer) {
@@ -414,13 +381,8 @@ Result<tiles::Store> fuse_elevation_layers(std::vector<ElevationLayer> layers, F
     index = std::move(complete);
   }
 
-  std::vector<std::vector<std::byte>> serialized(static_cast<size_t>(manifest.max_level) + 1);
-  for (tiles::LevelIndex& index : indices) {
-    serialized[static_cast<size_t>(index.level())] = index.serialize();
-  }
-  auto source = std::make_shared<const FusedSource>(name, std::move(shared), manifest.to_json(),
-                                                    std::move(serialized));
-  return tiles::Store::open(std::move(source));
+  return open_memory_store(name, manifest, indices,
+                           [shared](const geo::TileKey& key) { return shared->encoded(key); });
 }
 
 }  // namespace relief::pipeline

@@ -16,6 +16,8 @@
 #include "relief/tiles/geometric_error.h"
 #include "relief/tiles/store_layout.h"
 
+#include "memory_store.h"
+
 namespace relief::pipeline {
 namespace {
 
@@ -102,41 +104,6 @@ struct Processing {
     const RasterPtr r = RELIEF_TRY(processed(key));
     return tiles::encode_tile(*r, kKeptBorder, codec);
   }
-};
-
-// Serves the processed store's files from memory (manifest, level indexes)
-// and processes its tiles when fetched.
-class ProcessedSource final : public tiles::StoreSource {
- public:
-  ProcessedSource(std::string name, std::shared_ptr<const Processing> processing,
-                  std::string manifest, std::vector<std::vector<std::byte>> indices)
-      : name_(std::move(name)),
-        processing_(std::move(processing)),
-        manifest_(std::move(manifest)),
-        indices_(std::move(indices)) {}
-
-  std::string name() const override { return name_; }
-
-  Result<std::vector<std::byte>> fetch(const std::string& relative) const override {
-    if (relative == tiles::kManifestName) {
-      const auto* p = reinterpret_cast<const std::byte*>(manifest_.data());
-      return std::vector<std::byte>(p, p + manifest_.size());
-    }
-    for (size_t level = 0; level < indices_.size(); ++level) {
-      if (relative == tiles::level_index_relative_path(static_cast<int>(level))) {
-        return indices_[level];
-      }
-    }
-    const auto key = tiles::tile_key_from_relative_path(relative);
-    if (!key) return fail(fmt::format("{}/{}: no such file", name_, relative));
-    return processing_->encoded(*key);
-  }
-
- private:
-  std::string name_;
-  std::shared_ptr<const Processing> processing_;
-  std::string manifest_;
-  std::vector<std::vector<std::byte>> indices_;
 };
 
 // The pass that builds the indexes: every processed tile once (the error pass
@@ -354,13 +321,8 @@ Result<tiles::Store> process_elevation(tiles::Store store, const std::string& na
   }
   manifest.stats = pass.finest_stats();
 
-  std::vector<std::vector<std::byte>> serialized(static_cast<size_t>(manifest.max_level) + 1);
-  for (tiles::LevelIndex& index : indices) {
-    serialized[static_cast<size_t>(index.level())] = index.serialize();
-  }
-  auto source = std::make_shared<const ProcessedSource>(name, std::move(shared), manifest.to_json(),
-                                                        std::move(serialized));
-  return tiles::Store::open(std::move(source));
+  return open_memory_store(name, manifest, indices,
+                           [shared](const geo::TileKey& key) { return shared->encoded(key); });
 }
 
 }  // namespace relief::pipeline
