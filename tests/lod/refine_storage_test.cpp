@@ -1,6 +1,6 @@
 // How refinement stores what it keeps per diamond and per grid point:
 // diamond slots (MarkGrid::slot, class by class) and edge marks in blocks
-// allocated on first write (MarkBlocks, and SlotMarks by diamond slot).
+// allocated on first write (SlotMarks, by diamond slot).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -28,32 +28,7 @@ TEST(MarkGrid, SlotsNumberTheDiamondsOneToOne) {
 }
 
 // Marks read undecided until written, keep what was written per quad and
-// point, and are all undecided again after reset (blocks are reused).
-TEST(MarkBlocks, MarksPerQuadAndPointUndecidedAfterReset) {
-  const MarkGrid grid(5);
-  MarkBlocks marks;
-  for (int frame = 0; frame < 2; ++frame) {
-    marks.reset(grid, 3);
-    for (int q = 0; q < 3; ++q) {
-      for (int32_t y = 0; y <= grid.n(); ++y) {
-        for (int32_t x = 0; x <= 2 * grid.n(); ++x) {
-          ASSERT_EQ(marks.get(q, {x, y}), 0) << frame << " " << q << " " << x << "," << y;
-        }
-      }
-    }
-    uint8_t& first = marks.at(1, {3, 5});
-    first = 2;
-    for (int32_t x = 0; x <= 2 * grid.n(); x += 7) marks.at(2, {x, grid.n()}) = 1;
-    EXPECT_EQ(first, 2);  // still valid after more blocks were allocated
-    EXPECT_EQ(marks.get(1, {3, 5}), 2);
-    EXPECT_EQ(marks.get(0, {3, 5}), 0);
-    EXPECT_EQ(marks.get(2, {3, 5}), 0);
-    EXPECT_EQ(marks.get(2, {14, grid.n()}), 1);
-    EXPECT_EQ(marks.get(2, {15, grid.n()}), 0);
-  }
-}
-
-// The marks refinement uses, by diamond slot: the same contract.
+// slot, and are all undecided again after reset (blocks are reused).
 TEST(SlotMarks, MarksPerQuadAndSlotUndecidedAfterReset) {
   const MarkGrid grid(5);
   SlotMarks marks;

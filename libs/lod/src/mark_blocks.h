@@ -1,12 +1,12 @@
 #pragma once
-// The edge marks (one byte per grid point, 0 = undecided) of every quad of
-// one refinement, stored in blocks of 16 x 16 grid points allocated, zeroed,
-// on the first write. A frame decides a small part of each quad's grid (a
-// distant quad a few dozen marks of its 2^(2k+1) points): clearing whole
-// grids, about 0.5 MB a quad of 512 x 256 samples, took more time than
-// deciding the marks. Blocks are kept for the next reset(), so a thread that
-// refines frame after frame (refine.cpp keeps one per thread) allocates
-// nothing once warm. Addresses stay valid until reset().
+// The edge marks (one byte per diamond, 0 = undecided) of every quad of one
+// refinement, stored in blocks allocated, zeroed, on the first write. A frame
+// decides a small part of each quad's grid (a distant quad a few dozen marks
+// of its 2^(2k+1) points): clearing whole grids, about 0.5 MB a quad of
+// 512 x 256 samples, took more time than deciding the marks. Blocks are kept
+// for the next reset(), so a thread that refines frame after frame
+// (refine.cpp keeps one per thread) allocates nothing once warm. Addresses
+// stay valid until reset().
 #include <algorithm>
 #include <cstdint>
 #include <memory>
@@ -16,58 +16,7 @@
 
 namespace relief::lod {
 
-class MarkBlocks {
- public:
-  // Room for `quads` quads of `grid`, every mark undecided.
-  void reset(const MarkGrid& grid, size_t quads) {
-    columns_ = (static_cast<uint32_t>(grid.columns()) + kSide - 1) / kSide;
-    per_quad_ =
-        static_cast<size_t>(columns_) * ((static_cast<uint32_t>(grid.rows()) + kSide - 1) / kSide);
-    table_.assign(quads * per_quad_, nullptr);
-    used_ = 0;
-  }
-
-  uint8_t get(int q, GridPoint p) const {
-    const uint8_t* b = table_[slot(q, p)];
-    return b ? b[offset(p)] : uint8_t{0};
-  }
-
-  uint8_t& at(int q, GridPoint p) {
-    uint8_t*& b = table_[slot(q, p)];
-    if (!b) b = allocate();
-    return b[offset(p)];
-  }
-
- private:
-  static constexpr uint32_t kShift = 4, kSide = 1u << kShift, kBlockBytes = kSide * kSide;
-  static constexpr uint32_t kChunkBlocks = 256;
-
-  size_t slot(int q, GridPoint p) const {
-    const uint32_t x = static_cast<uint32_t>(p.x), y = static_cast<uint32_t>(p.y);
-    return static_cast<size_t>(q) * per_quad_ + (y >> kShift) * columns_ + (x >> kShift);
-  }
-  static uint32_t offset(GridPoint p) {
-    const uint32_t x = static_cast<uint32_t>(p.x), y = static_cast<uint32_t>(p.y);
-    return (y & (kSide - 1)) * kSide + (x & (kSide - 1));
-  }
-  uint8_t* allocate() {
-    const uint32_t b = used_++;
-    if (b / kChunkBlocks == chunks_.size()) {
-      chunks_.push_back(std::make_unique_for_overwrite<uint8_t[]>(kChunkBlocks * kBlockBytes));
-    }
-    uint8_t* block = chunks_[b / kChunkBlocks].get() + (b % kChunkBlocks) * kBlockBytes;
-    std::fill_n(block, kBlockBytes, uint8_t{0});
-    return block;
-  }
-
-  uint32_t columns_ = 0;
-  size_t per_quad_ = 0;
-  std::vector<uint8_t*> table_;  // per quad and block: the block, or null
-  std::vector<std::unique_ptr<uint8_t[]>> chunks_;
-  uint32_t used_ = 0;
-};
-
-// The same marks by diamond slot (MarkGrid::slot: class by class, row by row
+// Marks by diamond slot (MarkGrid::slot: class by class, row by row
 // within a class), in blocks of 256 slots: what refinement uses. Top-down, a
 // frame reaches the coarse diamonds of every quad and the fine ones of a few:
 // by grid point, each coarse mark took a 16 x 16 block of its own (a few
