@@ -6,7 +6,7 @@ packages=(
   libgdal-dev gdal-bin python3-gdal
   libegl-dev libgl-dev libopengl-dev libegl-mesa0 libgl1-mesa-dri
   nginx-light apache2-utils libcurl4-openssl-dev
-  libzstd-dev liblerc-dev libpng-dev libturbojpeg0-dev libwebp-dev
+  libzstd-dev libjemalloc-dev liblerc-dev libpng-dev libturbojpeg0-dev libwebp-dev
   nlohmann-json3-dev libfmt-dev libgtest-dev
   otb-bin
   libglfw3-dev libimgui-dev xvfb xauth                                   # relief view (libs/window)

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "allocator.h"
 #include "commands.h"
 
 namespace {
@@ -77,7 +78,7 @@ int main(int argc, char** argv) {
     if (command == "split") return relief::cli::run_split(args);
     if (command == "view") return relief::cli::run_view(args);
     if (command == "--version") {
-      std::puts("relief 0.1.0");
+      std::printf("relief 0.1.0\nallocator: %s\n", relief::cli::allocator_description().c_str());
       return 0;
     }
   } catch (const std::exception& e) {
