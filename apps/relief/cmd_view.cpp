@@ -65,8 +65,8 @@ options:
   --screenshot FILE  write the last frame (terrain only) as PNG at exit
   --screenshot-dir DIR  where F12 writes relief_NNNN.png (default .)
   --no-panels        start with the panels hidden
-  --no-overlap       draw each frame to the end before the next (no overlap of
-                     the next frame's refinement with this one's rasterisation)
+  --overlap          refine the next frame while the GL draws this one, and
+                     swap this one after that (docs/viewer.md, "Overlap")
   --no-vsync         do not wait for the display's refresh
   --fov, --exaggeration, --lod, --sky, --gpu-budget, --cache, --cache-size
                      as relief render
@@ -155,7 +155,7 @@ Result<window::ViewerOptions> viewer_options(const Args& args, const RenderSetup
   o.record = args.get("--record").has_value();
   o.screenshot_dir = args.get("--screenshot-dir").value_or(".");
   o.panels = !args.has("--no-panels");
-  o.overlap = !args.has("--no-overlap");
+  o.overlap = args.has("--overlap");
   o.collect_frames = args.get("--stats").has_value();
   return o;
 }
@@ -315,7 +315,7 @@ int run_view(const std::vector<std::string>& command_line) {
                                               {"--screenshot-dir"},
                                               {"--export-movie"},
                                               {"--no-panels", "", false},
-                                              {"--no-overlap", "", false},
+                                              {"--overlap", "", false},
                                               {"--no-vsync", "", false}}),
                           "view");
   if (!args) return report_error(args.error().message);
