@@ -65,6 +65,8 @@ options:
   --screenshot FILE  write the last frame (terrain only) as PNG at exit
   --screenshot-dir DIR  where F12 writes relief_NNNN.png (default .)
   --no-panels        start with the panels hidden
+  --overlap          refine the next frame while the GL draws this one, and
+                     swap this one after that (docs/viewer.md, "Overlap")
   --no-vsync         do not wait for the display's refresh
   --fov, --exaggeration, --lod, --sky, --gpu-budget, --cache, --cache-size
                      as relief render
@@ -153,6 +155,7 @@ Result<window::ViewerOptions> viewer_options(const Args& args, const RenderSetup
   o.record = args.get("--record").has_value();
   o.screenshot_dir = args.get("--screenshot-dir").value_or(".");
   o.panels = !args.has("--no-panels");
+  o.overlap = args.has("--overlap");
   o.collect_frames = args.get("--stats").has_value();
   return o;
 }
@@ -165,6 +168,13 @@ nlohmann::json stats_json(const window::ViewerSummary& s, const std::string& ren
                       {"time", f.time},
                       {"frame_ms", f.frame_ms},
                       {"draw_ms", f.draw_ms},
+                      {"select_ms", f.select_ms},
+                      {"prepare_ms", f.prepare_ms},
+                      {"gpu_ms", f.gpu_ms},
+                      {"submit_ms", f.submit_ms},
+                      {"swap_ms", f.swap_ms},
+                      {"present_ms", f.present_ms},
+                      {"tiles_uploaded", f.tiles_uploaded},
                       {"pixel_error", f.pixel_error},
                       {"camera", {c.lon, c.lat, c.height, c.heading, c.pitch, c.roll}},
                       {"quads", f.quads},
@@ -305,6 +315,7 @@ int run_view(const std::vector<std::string>& command_line) {
                                               {"--screenshot-dir"},
                                               {"--export-movie"},
                                               {"--no-panels", "", false},
+                                              {"--overlap", "", false},
                                               {"--no-vsync", "", false}}),
                           "view");
   if (!args) return report_error(args.error().message);

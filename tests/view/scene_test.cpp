@@ -412,6 +412,55 @@ TEST_F(SceneTest, AFrozenSelectionIsDrawnFromTheNewCamera) {
   EXPECT_TRUE(thawed->complete);
 }
 
+// The viewer's overlap (docs/viewer.md): draw() calls `before_drawing` once,
+// after the frame's selection and refinement and before any GL call of the
+// frame (the target still holds the previous frame there), and a renderer
+// that does not wait for the GL (RenderOptions::finish off) draws the same
+// pixels once they are read back.
+TEST_F(SceneTest, BeforeDrawingComesBeforeTheFramesGlWorkAndNotWaitingDrawsTheSame) {
+  lod::Camera closer = kOblique;
+  closer.lon += 0.1;
+  closer.height *= 0.5;
+  std::vector<std::vector<uint8_t>> expected;
+  SceneOptions o;
+  o.interactive = false;
+  o.selection.mode = lod::LodMode::edge_marks;
+  o.mesh_level = 3;
+  {
+    auto reference = Scene::create(testing::pyrenees_store(), nullptr, o, clock_);
+    ASSERT_TRUE(reference) << reference.error().message;
+    for (const lod::Camera& c : {closer, kOblique}) {
+      ASSERT_TRUE((*reference)->draw(c, *target_));
+      expected.push_back(*target_->read_rgba());
+    }
+  }
+  ASSERT_NE(expected[0], expected[1]);  // else the test proves nothing
+
+  o.render.finish = false;
+  auto s = Scene::create(testing::pyrenees_store(), nullptr, o, clock_);
+  ASSERT_TRUE(s) << s.error().message;
+  ASSERT_TRUE((*s)->draw(closer, *target_));
+  EXPECT_EQ(*target_->read_rgba(), expected[0]);
+  int calls = 0;
+  std::vector<uint8_t> seen;
+  const auto before = [&] {
+    ++calls;
+    seen = *target_->read_rgba();
+  };
+  auto frame = (*s)->draw(kOblique, *target_, before);
+  ASSERT_TRUE(frame) << frame.error().message;
+  EXPECT_EQ(calls, 1);
+  EXPECT_EQ(seen, expected[0]) << "the frame's GL work began before before_drawing";
+  ASSERT_TRUE(frame->refine);  // refined before: the report has its statistics
+  EXPECT_GT(frame->refine->marks_evaluated, 0u);
+  EXPECT_EQ(*target_->read_rgba(), expected[1]);
+
+  (*s)->set_selection_frozen(true);  // frozen frames call it too
+  ASSERT_TRUE((*s)->draw(closer, *target_, before));
+  EXPECT_EQ(calls, 2);
+  EXPECT_EQ(seen, expected[1]);
+}
+
 // The LOD panel's wireframe: the same triangles as lines, the sky between them.
 TEST_F(SceneTest, WireframeDrawsTheTrianglesEdges) {
   auto s = scene(false);

@@ -440,6 +440,41 @@ size_t differing_pixels(const std::vector<uint8_t>& a, const std::vector<uint8_t
   return n;
 }
 
+// Overlap (docs/viewer.md): while frames follow one another (the camera
+// moves), each frame's swap is left to the next, which swaps it once its own
+// selection and refinement are made; quitting swaps what is left. Without
+// overlap every frame is swapped before frame() returns.
+TEST_F(WindowTest, WhileFramesFollowEachOtherEachIsSwappedByTheNext) {
+  view::InputEvent pan;
+  pan.type = Type::key_down, pan.key = view::Key::w;
+  view::InputEvent escape;
+  escape.type = Type::key_down, escape.key = view::Key::escape;
+  for (const bool overlap : {true, false}) {
+    SCOPED_TRACE(overlap ? "overlap" : "no overlap");
+    ManualClock clock;
+    ViewerOptions o;
+    o.start = kCamera;
+    o.panels = false;
+    o.overlap = overlap;
+    auto v = viewer(o, clock);
+    ASSERT_TRUE(v);
+    window_->deliver(pan);  // held: the camera moves every frame
+    const uint64_t swaps = window_->swaps();
+    for (uint64_t frame = 1; frame <= 3; ++frame) {
+      clock.advance(100ms);
+      ASSERT_TRUE(v->frame());
+      EXPECT_EQ(window_->swaps() - swaps, overlap ? frame - 1 : frame);
+      EXPECT_EQ(window_->swap_is_pending(), overlap);
+    }
+    window_->deliver(escape);
+    auto more = v->frame();
+    ASSERT_TRUE(more);
+    EXPECT_FALSE(*more);
+    EXPECT_EQ(window_->swaps() - swaps, 3u);
+    EXPECT_FALSE(window_->swap_is_pending());
+  }
+}
+
 TEST_F(WindowTest, PanelsAreDrawnOverTheFrameButNotInScreenshots) {
   ManualClock clock;
   ViewerOptions o;
@@ -450,6 +485,7 @@ TEST_F(WindowTest, PanelsAreDrawnOverTheFrameButNotInScreenshots) {
   ASSERT_TRUE(v->frame());  // Dear ImGui sizes auto-resized panels in their first frame
   clock.advance(100ms);
   ASSERT_TRUE(v->frame());
+  window_->swap_pending();  // overlap: else the next frame swaps this one
   auto frame = window_->target().read_rgba();
   const std::vector<uint8_t>* screen = &window_->screen();
   ASSERT_TRUE(frame);
@@ -462,6 +498,7 @@ TEST_F(WindowTest, PanelsAreDrawnOverTheFrameButNotInScreenshots) {
   window_->deliver(tab);
   clock.advance(100ms);
   ASSERT_TRUE(v->frame());
+  window_->swap_pending();
   frame = window_->target().read_rgba();
   ASSERT_TRUE(frame);
   EXPECT_EQ(differing_pixels(*frame, *screen), 0u) << "without panels the screen is the frame";

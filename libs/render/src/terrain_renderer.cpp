@@ -222,7 +222,9 @@ class GlTerrainRenderer final : public TerrainRenderer {
     glPolygonMode(GL_FRONT_AND_BACK, o.wireframe ? GL_LINE : GL_FILL);
     stats.draw_calls = multi_draw(selection);
     glPolygonMode(GL_FRONT_AND_BACK, GL_FILL);
-    glFinish();
+    glFlush();  // llvmpipe's threads rasterise from here
+    stats.submit_seconds = std::chrono::duration<double>(Clock::now() - gpu_start).count();
+    if (o.finish) glFinish();
     stats.gpu_seconds = std::chrono::duration<double>(Clock::now() - gpu_start).count();
     if (auto e = gl_error(); !e.empty()) return fail("drawing: " + e);
     return stats;

@@ -272,7 +272,8 @@ Status Scene::set_texture_layers(std::vector<render::TextureLayer> layers) {
   return {};
 }
 
-Result<FrameReport> Scene::draw(const lod::Camera& camera, render::RenderTarget& target) {
+Result<FrameReport> Scene::draw(const lod::Camera& camera, render::RenderTarget& target,
+                                const std::function<void()>& before_drawing) {
   Impl& m = *impl_;
   const lod::View view = RELIEF_TRY(lod::make_view(camera));
   FrameReport report;
@@ -280,6 +281,7 @@ Result<FrameReport> Scene::draw(const lod::Camera& camera, render::RenderTarget&
   const auto start = m.clock.now();
   if (m.frozen && m.drawn) {  // the last frame's pins stay: no begin_frame()
     const lod::RefinedMesh* refined = m.last_refined ? &*m.last_refined : nullptr;
+    if (before_drawing) before_drawing();
     report.draw = RELIEF_TRY(m.draw_selection(view, m.last, target, refined));
     if (m.hints) RELIEF_CHECK(m.draw_hints(view, m.last, target, report, *this));
     report.frame_seconds = seconds_between(start, m.clock.now());
@@ -300,6 +302,7 @@ Result<FrameReport> Scene::draw(const lod::Camera& camera, render::RenderTarget&
     if (!requested) return std::unexpected(requested.error());
   }
   m.terrain->end_frame();
+  report.select_seconds = seconds_between(start, m.clock.now());
   std::optional<lod::RefinedMesh> refined;
   bool wants_more = false;  // the next frame splits more
   if (m.edge_marks()) {
@@ -322,6 +325,7 @@ Result<FrameReport> Scene::draw(const lod::Camera& camera, render::RenderTarget&
     report.refine_cache_tiles = m.refine_cache->tiles();
     report.refine_cache_bytes = m.refine_cache->bytes();
   }
+  if (before_drawing) before_drawing();
   report.draw =
       RELIEF_TRY(m.draw_selection(view, selection, target, refined ? &*refined : nullptr));
   if (m.hints) RELIEF_CHECK(m.draw_hints(view, selection, target, report, *this));

@@ -206,6 +206,8 @@ Result<std::unique_ptr<Viewer>> Viewer::create(Window& window, const tiles::Stor
   impl->panels = options.panels;
   impl->recording = options.record;
   impl->threshold = scene.selection.pixel_error;
+  // Overlap: the scene's frames return once the GL has their draw calls.
+  impl->scene_options.render.finish = !options.overlap;
   RELIEF_CHECK(impl->make_scene());
   lod::Camera start = options.start;
   start.width = window.target().width();
@@ -238,7 +240,10 @@ Result<bool> Viewer::frame() {
     v.window.poll_events();
   }
   v.poll_export();
-  if (v.quit || v.window.should_close()) return false;
+  if (v.quit || v.window.should_close()) {
+    v.window.swap_pending();
+    return false;
+  }
   const Clock::TimePoint now = v.clock.now();
   if (v.idle != Idle::no) {
     v.waited += seconds_between(entered, now);
@@ -293,7 +298,15 @@ Result<bool> Viewer::frame() {
   v.threshold = v.speed_lod.threshold(still, dt, v.controller->angular_speed(),
                                       v.controller->linear_speed(), std::max(above, 1.0));
   v.scene->set_pixel_error(v.threshold);
-  const view::FrameReport report = RELIEF_TRY(v.scene->draw(camera, target));
+  // The previous frame, if its swap was left to this one: swapped once this
+  // frame's selection and refinement are made (they ran while the GL drew it).
+  double swap_ms = 0;
+  const auto swap_previous = [&] {
+    const Clock::TimePoint swapping = v.clock.now();
+    v.window.swap_pending();
+    swap_ms = seconds_between(swapping, v.clock.now()) * 1e3;
+  };
+  const view::FrameReport report = RELIEF_TRY(v.scene->draw(camera, target, swap_previous));
   v.report = report;
   if (v.recording) v.record(camera);
   const bool playing =
@@ -322,6 +335,11 @@ Result<bool> Viewer::frame() {
                         report.draw.triangles_per_pixel(),
                         report.draw.geometry_bytes + report.draw.texture_bytes, report.complete});
     ViewerFrame& f = v.frames.back();
+    f.select_ms = report.select_seconds * 1e3;
+    f.prepare_ms = report.draw.prepare_seconds * 1e3;
+    f.gpu_ms = report.draw.gpu_seconds * 1e3;
+    f.submit_ms = report.draw.submit_seconds * 1e3;
+    f.tiles_uploaded = report.draw.uploads;
     if (report.refine) {
       f.refine_ms = report.refine->seconds * 1e3;
       f.refine_cpu_ms = report.refine->cpu_seconds * 1e3;
@@ -338,11 +356,19 @@ Result<bool> Viewer::frame() {
   if (stream::TileLoader* loader = v.scene->imagery_loader()) {
     v.imagery_rate.update(v.time, loader->stats());
   }
+  const Clock::TimePoint presenting = v.clock.now();
+  // Left to the next frame only when that follows at once (no idle wait).
+  const bool defer_swap = v.options.overlap && v.idle == Impl::Idle::no;
   if (v.panels) {
     v.pick = v.cursor_x >= 0 ? view::pick(camera, v.cursor_x, v.cursor_y, ground) : std::nullopt;
-    v.window.present([&v] { draw_panels(v); });
+    v.window.present([&v] { draw_panels(v); }, defer_swap);
   } else {
-    v.window.present({});
+    v.window.present({}, defer_swap);
+  }
+  if (v.options.collect_frames) {
+    // The wait for the previous frame's swap (overlap), then this one's copy and panels.
+    v.frames.back().swap_ms = swap_ms;
+    v.frames.back().present_ms = seconds_between(presenting, v.clock.now()) * 1e3;
   }
   ++v.index;
   v.drawn_events = v.window.events();  // what the panels took while drawn included
@@ -356,6 +382,7 @@ Result<bool> Viewer::frame() {
     // is still relaxed after the motion is coarser than the still.
     const bool done = report.complete && v.threshold <= still;
     if (path_done && (done || v.time - *v.path_end >= v.options.until_complete)) {
+      v.window.swap_pending();
       return false;
     }
   }

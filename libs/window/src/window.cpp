@@ -4,6 +4,7 @@
 #include <cassert>
 #include <chrono>
 #include <cstdlib>
+#include <optional>
 #include <string>
 #include <thread>
 #include <tuple>
@@ -60,6 +61,10 @@ struct Window::Impl {
   InputHandler handler;
   bool vsync = true, imgui = false, fullscreen = false, keep_screen = false;
   uint64_t events = 0;  // events()
+  // present(ui, true): the frame's copy to the screen, its panels and its
+  // swap, left to swap_pending().
+  std::optional<std::function<void()>> pending;
+  uint64_t swaps = 0;
   std::vector<uint8_t> screen;
   int windowed_x = 0, windowed_y = 0, windowed_width = 0, windowed_height = 0;
 
@@ -260,6 +265,7 @@ void Window::set_input_handler(InputHandler handler) {
 
 void Window::deliver(const view::InputEvent& event) {
   if (event.type == view::InputEvent::Type::resize && event.x >= 1 && event.y >= 1) {
+    swap_pending();  // a frame left to swap is shown before its target goes
     // A failed resize keeps the previous size: the frame is scaled to the window.
     (void)impl_->target.resize(static_cast<int>(event.x), static_cast<int>(event.y));
   }
@@ -291,9 +297,19 @@ void Window::request_close() {
   glfwSetWindowShouldClose(impl_->window, GLFW_TRUE);
 }
 
-void Window::present(const std::function<void()>& ui) {
+void Window::present(const std::function<void()>& ui, bool defer_swap) {
+  impl_->pending = ui;
+  if (!defer_swap) swap_pending();
+}
+
+void Window::swap_pending() {
+  if (!impl_->pending) return;
+  const std::function<void()> ui = std::move(*impl_->pending);
+  impl_->pending.reset();
   int width = 0, height = 0;
   glfwGetFramebufferSize(impl_->window, &width, &height);
+  // The copy reads the target, so it waits for the GL to finish drawing it
+  // (llvmpipe): hence it is deferred with the swap.
   impl_->target.bind();  // the read framebuffer of the copy
   glBindFramebuffer(GL_DRAW_FRAMEBUFFER, 0);
   glBlitFramebuffer(0, 0, impl_->target.width(), impl_->target.height(), 0, 0, width, height,
@@ -310,6 +326,15 @@ void Window::present(const std::function<void()>& ui) {
   }
   if (impl_->keep_screen) read_back_buffer(width, height, impl_->screen);
   glfwSwapBuffers(impl_->window);
+  ++impl_->swaps;
+}
+
+bool Window::swap_is_pending() const {
+  return impl_->pending.has_value();
+}
+
+uint64_t Window::swaps() const {
+  return impl_->swaps;
 }
 
 void Window::set_keep_screen(bool on) {

@@ -36,6 +36,11 @@ struct RenderOptions {
   // the latency issue 14 asks of a parameter change. Tests that step frames
   // deterministically set it to infinity (the budget reads the steady clock).
   double processing_per_frame = 0.1;
+  // draw() returns once the GL has drawn the frame (glFinish; gpu_seconds
+  // measures it). False: once the draw calls are issued and flushed, so the
+  // caller works while the GL draws (the viewer, docs/viewer.md "Overlap");
+  // gpu_seconds is then submit_seconds.
+  bool finish = true;
 };
 
 struct FrameStats {
@@ -51,6 +56,9 @@ struct FrameStats {
   uint64_t geometry_bytes = 0, texture_bytes = 0;
   double prepare_seconds = 0;  // CPU: records, textures and uploads
   double gpu_seconds = 0;      // draw calls to glFinish
+  // Of gpu_seconds: issuing the draw calls (llvmpipe shades vertices and bins
+  // triangles on the calling thread; its own threads rasterise after).
+  double submit_seconds = 0;
   // The GPU cache (L3) after the frame: resident tiles, their bytes, tiles
   // uploaded and evicted by this frame, layers allocated in the texture
   // arrays (slots, resident or free) and their bytes.

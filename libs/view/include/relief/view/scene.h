@@ -84,7 +84,10 @@ struct FrameReport {
   uint64_t refine_cache_bytes = 0;
   render::FrameStats draw;
   double frame_seconds = 0;  // selection to the end of drawing, on the clock
-  double cpu_seconds = 0;    // the same without the wait for the GPU
+  // Of frame_seconds on the clock: selection with its requests and prefetch
+  // (refinement and drawing are in refine and draw).
+  double select_seconds = 0;
+  double cpu_seconds = 0;  // the same without the wait for the GPU
   // Everything this frame wanted was resident and drawn (elevation and
   // imagery): the frame equals the complete frame of its camera.
   bool complete = false;
@@ -113,8 +116,12 @@ class Scene {
   Scene(const Scene&) = delete;
   Scene& operator=(const Scene&) = delete;
 
-  // One frame of `camera` into `target`.
-  Result<FrameReport> draw(const lod::Camera& camera, render::RenderTarget& target);
+  // One frame of `camera` into `target`. `before_drawing`, when given, is
+  // called once the frame's selection and refinement are made, before its
+  // first GL call: the viewer swaps the previous frame there, so that
+  // frame's rasterisation (llvmpipe's threads) overlaps this one's CPU work.
+  Result<FrameReport> draw(const lod::Camera& camera, render::RenderTarget& target,
+                           const std::function<void()>& before_drawing = {});
   // The next frame does not continue the previous one's motion (a cut in a
   // path, a jump in the viewer): no prefetch between them.
   void cut();

@@ -43,6 +43,14 @@ struct ViewerOptions {
   std::string screenshot_dir = ".";
   bool panels = true;
   bool collect_frames = false;  // keep every frame's record (for --stats)
+  // Overlap (docs/viewer.md): while frames follow one another at once, a
+  // frame is swapped to the screen by the next one, after that one's
+  // selection and refinement, which run while the GL (llvmpipe's threads)
+  // still draws it; the screen is then one frame behind the target. Off
+  // (the default: on the loaded 2-core machine it was slower as often as
+  // faster, docs/viewer.md): every frame waits for the GL and is swapped
+  // before frame() returns.
+  bool overlap = false;
   // Idle: once the camera is still (no input, not recording: the path
   // would glide through the pause; not playing a path), frame() waits up to
   // this long for an event instead of drawing. A complete frame (at the
@@ -83,6 +91,16 @@ struct ViewerFrame {
   double refine_ms = 0, refine_cpu_ms = 0;
   uint64_t marks_evaluated = 0, marks_reused = 0;
   uint32_t quads_reused = 0;
+  // Where the frame went, on the clock (ms): the scene's selection with its
+  // requests, the renderer's preparation (records, tile textures and their
+  // uploads), issuing the draw calls (submit: llvmpipe shades vertices and
+  // bins on this thread) and, without overlap, the wait for the GL to draw
+  // (gpu: submit and the rasterisation, to glFinish); swap: the wait for the
+  // previous frame's swap (overlap: the rest of its rasterisation, within
+  // draw_ms); present: this frame's copy to the screen and panels (and its
+  // swap without overlap).
+  double select_ms = 0, prepare_ms = 0, gpu_ms = 0, submit_ms = 0, swap_ms = 0, present_ms = 0;
+  uint32_t tiles_uploaded = 0;  // tile textures uploaded by this frame (L3 misses)
   // CPU time of the whole process (render, loaders, llvmpipe's threads)
   // over the same period, idle waits included (the loaders work in them):
   // what a frame costs on a shared machine. 0 for the last frame.

@@ -66,8 +66,16 @@ class Window {
   void request_close();
 
   // Copies the target to the screen, draws `ui` (Dear ImGui calls, may be
-  // empty) over it and swaps buffers.
-  void present(const std::function<void()>& ui);
+  // empty) over it and swaps buffers. With `defer_swap` all three wait for
+  // swap_pending() (the copy waits for the GL to finish drawing the target:
+  // llvmpipe rasterises on its own threads), so the caller can work (the
+  // next frame's refinement) meanwhile (docs/viewer.md, "Overlap"). `ui` is
+  // called then, and what it uses must still be there.
+  void present(const std::function<void()>& ui, bool defer_swap = false);
+  // Copies, draws the panels of and swaps the frame present(ui, true) left, if any.
+  void swap_pending();
+  bool swap_is_pending() const;
+  uint64_t swaps() const;  // buffer swaps so far
 
   // While on, present() keeps a copy of what it puts on the screen (frame
   // and panels; a read-back per frame, so off by default): screen() returns
