@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include "allocator.h"
 #include "args.h"
 #include "commands.h"
 #include "relief/base/memory_use.h"
@@ -126,6 +127,7 @@ int run_build(const std::vector<std::string>& argv) {
                                       format_bytes(physical)));
     }
     o.memory_budget = *bytes;
+    fit_allocator_to_budget(*bytes);
   }
   auto threads = args->get_int("--threads", 1, 1024);
   if (!threads) return fail_on(threads.error());

@@ -4,6 +4,7 @@
 
 #include <fmt/format.h>
 
+#include "allocator.h"
 #include "args.h"
 #include "commands.h"
 #include "output_safety.h"
@@ -95,6 +96,7 @@ int run_process(const std::vector<std::string>& argv) {
     if (*bytes < (uint64_t{16} << 20))
       return report_error("--memory: the budget must be at least 16 MiB");
     o.memory_budget = *bytes;
+    fit_allocator_to_budget(*bytes);
   }
   auto threads = args->get_int("--threads", 1, 1024);
   if (!threads) return report_error(threads.error().message);

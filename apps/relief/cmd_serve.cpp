@@ -3,6 +3,7 @@
 
 #include <fmt/format.h>
 
+#include "allocator.h"
 #include "args.h"
 #include "commands.h"
 #include "relief/serve/store_server.h"
@@ -41,6 +42,7 @@ options:
 
 int run_serve(const std::vector<std::string>& argv) {
   if (wants_help(argv)) return print_help(kHelp);
+  give_up_huge_pages();
   auto args = Args::parse(argv,
                           {{"--port"},
                            {"--bind"},
