@@ -5,14 +5,12 @@
 
 #include "args.h"
 #include "commands.h"
-#include "elevation_options.h"
 #include "output_safety.h"
 #include "relief/lod/selection.h"
 #include "relief/render/terrain_renderer.h"
 #include "render_parallel.h"
 #include "render_path.h"
 #include "render_setup.h"
-#include "texture_options.h"
 
 namespace relief::cli {
 
@@ -227,18 +225,11 @@ int render_still(const Args& args, RenderSetup& setup) {
 }  // namespace
 
 int run_render(const std::vector<std::string>& command_line) {
-  if (wants_help(command_line)) {
-    std::string help = kHelp;
-    help.replace(help.find("%TEXTURE%"), 9,
-                 std::string(kElevationOptionsHelp) + kTextureOptionsHelp);
-    return print_help(help.c_str());
-  }
-  // Texture options repeat and their order matters: taken out first.
+  if (wants_help(command_line)) return print_help(help_with_layer_options(kHelp).c_str());
+  // Layer options repeat and their order matters: taken out first.
   std::vector<std::string> argv = command_line;
-  auto textures = take_texture_layers(argv);
-  if (!textures) return report_error(textures.error().message);
-  auto elevation = take_elevation_processing(argv);
-  if (!elevation) return report_error(elevation.error().message);
+  auto layers = take_layer_options(argv);
+  if (!layers) return report_error(layers.error().message);
   auto args = Args::parse(argv,
                           with_scene_options({{"--output", "-o"},
                                               {"--path"},
@@ -275,18 +266,19 @@ int run_render(const std::vector<std::string>& command_line) {
       if (args->get(name)) return report_error(std::string(name) + ": only for a movie (--path)");
     }
   }
-  if (auto safe = check_render_outputs(*args, textures->paths); !safe) {
+  if (auto safe = check_render_outputs(*args, layers->textures.paths); !safe) {
     return report_error(safe.error().message);
   }
   if (args->get("--composite") && !args->get("--parallel")) {
     return report_error("--composite: only with --parallel sort-last:...");
   }
   if (args->get("--parallel")) {
-    if (!textures->layers.empty()) return report_error("--parallel: not with --texture layers yet");
-    if (!elevation->empty()) return report_error("--parallel: not with --elevation-op yet");
+    if (!layers->textures.layers.empty())
+      return report_error("--parallel: not with --texture layers yet");
+    if (!layers->elevation.empty()) return report_error("--parallel: not with --elevation-op yet");
     return render_parallel(*args);
   }
-  auto setup = parse_render_setup(*args, std::move(*textures), std::move(*elevation));
+  auto setup = parse_render_setup(*args, std::move(layers->textures), std::move(layers->elevation));
   if (!setup) return report_error(setup.error().message);
   if (args->get("--path")) return render_path(*args, *setup);
   return render_still(*args, *setup);

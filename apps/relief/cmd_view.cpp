@@ -9,14 +9,12 @@
 
 #include "args.h"
 #include "commands.h"
-#include "elevation_options.h"
 #include "output_safety.h"
 #include "relief/view/path_file.h"
 #include "relief/window/viewer.h"
 #include "relief/window/window.h"
 #include "render_path.h"
 #include "render_setup.h"
-#include "texture_options.h"
 
 namespace relief::cli {
 
@@ -291,18 +289,11 @@ int view_session(const Args& args, RenderSetup& setup) {
 }  // namespace
 
 int run_view(const std::vector<std::string>& command_line) {
-  if (wants_help(command_line)) {
-    std::string help = kHelp;
-    help.replace(help.find("%TEXTURE%"), 9,
-                 std::string(kElevationOptionsHelp) + kTextureOptionsHelp);
-    return print_help(help.c_str());
-  }
-  // The texture layers of `relief render`, parsed the same way.
+  if (wants_help(command_line)) return print_help(help_with_layer_options(kHelp).c_str());
+  // Layer options repeat and their order matters: taken out first.
   std::vector<std::string> argv = command_line;
-  auto textures = take_texture_layers(argv);
-  if (!textures) return report_error(textures.error().message);
-  auto elevation = take_elevation_processing(argv);
-  if (!elevation) return report_error(elevation.error().message);
+  auto layers = take_layer_options(argv);
+  if (!layers) return report_error(layers.error().message);
   auto args = Args::parse(argv,
                           with_scene_options({{"--mode"},
                                               {"--no-speed-lod", "", false},
@@ -326,10 +317,10 @@ int run_view(const std::vector<std::string>& command_line) {
       (args->get("--camera") || args->get("--look-at") || args->get("--mode"))) {
     return report_error("view: --play replaces --camera, --look-at and --mode");
   }
-  if (auto safe = check_view_outputs(*args, textures->paths); !safe) {
+  if (auto safe = check_view_outputs(*args, layers->textures.paths); !safe) {
     return report_error(safe.error().message);
   }
-  auto setup = parse_render_setup(*args, std::move(*textures), std::move(*elevation));
+  auto setup = parse_render_setup(*args, std::move(layers->textures), std::move(layers->elevation));
   if (!setup) return report_error(setup.error().message);
   return view_session(*args, *setup);
 }

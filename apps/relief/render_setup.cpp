@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "detector_options.h"
+#include "elevation_options.h"
 #include "relief/base/file_io.h"
 #include "relief/base/units.h"
 #include "relief/pipeline/fused_elevation.h"
@@ -68,6 +69,19 @@ Result<tiles::Store> fuse_elevation_options(const Args& args, const std::string&
   }
   ThreadExecutor executor;
   return pipeline::fuse_elevation_layers(std::move(layers), mode, executor, std::move(weights));
+}
+
+Result<LayerOptions> take_layer_options(std::vector<std::string>& argv) {
+  LayerOptions layers;
+  layers.textures = RELIEF_TRY(take_texture_layers(argv));
+  layers.elevation = RELIEF_TRY(take_elevation_processing(argv));
+  return layers;
+}
+
+std::string help_with_layer_options(const char* help) {
+  std::string text = help;
+  text.replace(text.find("%TEXTURE%"), 9, std::string(kElevationOptionsHelp) + kTextureOptionsHelp);
+  return text;
 }
 
 std::vector<OptionSpec> with_scene_options(std::vector<OptionSpec> own) {

@@ -34,6 +34,18 @@ struct RenderSetup {
   uint64_t disk_cache_budget = 0;
 };
 
+// The layer options `relief render` and `relief view` take out of their
+// arguments before the rest is parsed: the --texture family (repeating, in
+// order) and the --elevation-op family.
+struct LayerOptions {
+  TextureLayers textures;
+  pipeline::ElevationProcessing elevation;
+};
+Result<LayerOptions> take_layer_options(std::vector<std::string>& argv);
+
+// A command's help with both families' help in place of its %TEXTURE%.
+std::string help_with_layer_options(const char* help);
+
 // `textures`: the --texture layers (take_texture_layers()); with any, the
 // elevation store is optional (they drape on the ellipsoid).
 // `own` (a command's options) and the options parse_render_setup() reads,
