@@ -5,7 +5,6 @@
 #include <map>
 #include <memory>
 #include <mutex>
-#include <numbers>
 #include <optional>
 #include <unordered_map>
 #include <unordered_set>
@@ -13,6 +12,7 @@
 #include <fmt/format.h>
 
 #include "relief/base/progress.h"
+#include "relief/geo/tangent_plane.h"
 #include "relief/tiles/geometric_error.h"
 #include "relief/tiles/store_layout.h"
 
@@ -27,10 +27,6 @@ using RasterPtr = std::shared_ptr<const tiles::Raster>;
 // one sample beyond a tile's edge, bilinearly (libs/render/src/shaders.h), so
 // two samples shade the tiles' edges as the input's border does.
 constexpr int kKeptBorder = 2;
-
-// As the texture layers' lens pass (gpuprocess/composite.cpp) and
-// view::lens_distance_m.
-constexpr double kMetresPerDegree = 6378137.0 * std::numbers::pi / 180;
 
 // What the presented store's tiles are made from; shared by its source and
 // the pass that builds its indexes.
@@ -235,11 +231,7 @@ std::string describe(const gpuprocess::OperatorChain& chain) {
 }  // namespace
 
 double lens_distance_m(double lon0, double lat0, double lon, double lat) {
-  double dlon = lon - lon0;
-  dlon -= 360 * std::round(dlon / 360);  // across the antimeridian
-  const double x = dlon * kMetresPerDegree * std::cos(lat0 * std::numbers::pi / 180);
-  const double y = (lat - lat0) * kMetresPerDegree;
-  return std::hypot(x, y);
+  return geo::tangent_plane_distance_m(lon0, lat0, lon, lat);
 }
 
 Status check_elevation_processing(const ElevationProcessing& processing,

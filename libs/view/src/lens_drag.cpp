@@ -1,21 +1,11 @@
 #include "relief/view/lens_drag.h"
 
-#include <cmath>
-#include <numbers>
+#include "relief/geo/tangent_plane.h"
 
 namespace relief::view {
 
-namespace {
-// As the lens pass (gpuprocess/composite.cpp): a sphere of the equatorial radius.
-constexpr double kMetresPerDegree = 6378137.0 * std::numbers::pi / 180;
-}  // namespace
-
 double lens_distance_m(double lon0, double lat0, double lon, double lat) {
-  double dlon = lon - lon0;
-  dlon -= 360 * std::round(dlon / 360);  // across the antimeridian
-  const double x = dlon * kMetresPerDegree * std::cos(lat0 * std::numbers::pi / 180);
-  const double y = (lat - lat0) * kMetresPerDegree;
-  return std::hypot(x, y);
+  return geo::tangent_plane_distance_m(lon0, lat0, lon, lat);
 }
 
 std::optional<LensRef> lens_at(const std::vector<render::TextureLayer>& layers, double lon,
