@@ -138,10 +138,10 @@ TEST(TaskGraphBuild, TwoWorkersWriteTheStoreOneWorkerWrites) {
 }
 
 // A budget whose core cache holds about 26 of the ~150 finest interiors (2
-// workers: 88 MiB reserved, a third of the rest for GDAL): spilled interiors
+// workers: 96 MiB reserved, a third of the rest for GDAL): spilled interiors
 // are read back while other tasks run.
 TEST(TaskGraphBuild, TwoWorkersBeyondTheMemoryBudgetWriteTheSameStore) {
-  expect_same_store_on_one_and_two_workers(8, 11, uint64_t{108} << 20, 150);
+  expect_same_store_on_one_and_two_workers(8, 11, uint64_t{116} << 20, 150);
 }
 
 }  // namespace

@@ -283,8 +283,8 @@ struct MemoryPlan {
 constexpr uint64_t kMiB = uint64_t{1} << 20;
 // Measured with `/usr/bin/time` and massif on two SRTM tiles: the libraries'
 // pages are 43 MiB resident during a build, the allocator starts with 5 to
-// 10 MiB of its own.
-constexpr uint64_t kProcessReserve = 64 * kMiB;
+// 10 MiB of its own and strands some more between its arenas.
+constexpr uint64_t kProcessReserve = 72 * kMiB;
 constexpr uint64_t kWorkerReserve = 12 * kMiB;
 constexpr uint64_t kMinimumCaches = 16 * kMiB;
 
