@@ -14,7 +14,8 @@ std::string allocator_description();
 // allocator's partly used memory up to 2 MiB pages (about 12 MiB more peak
 // for `relief build --memory 128MiB` on two SRTM tiles, measured), which a
 // small budget cannot spare, while their gain (fewer page faults) matters
-// only for builds large enough to be given a large budget.
+// only for builds large enough to be given a large budget. glibc's malloc
+// (a build without jemalloc) is also held to two arenas there.
 void fit_allocator_to_budget(uint64_t budget_bytes);
 
 // The same for a long-running server (`relief serve`): its allocations are

@@ -1,6 +1,6 @@
-// Transparent huge pages under a small --memory budget (allocator.h). The
-// kernel's per-process switch applies whatever the allocator asked for with
-// madvise, so one function serves jemalloc and the system malloc alike.
+// The allocator under a small --memory budget (allocator.h). The kernel's
+// per-process switch for huge pages applies whatever the allocator asked for
+// with madvise, so it serves jemalloc and the system malloc alike.
 #include <malloc.h>
 #include <sys/prctl.h>
 
@@ -23,7 +23,7 @@ void fit_allocator_to_budget(uint64_t budget_bytes) {
   // glibc's malloc gives each thread that meets contention an arena of its
   // own (up to 8 per core), and memory freed in one is not reused by the
   // others: a 128 MiB build peaked at 134-139 MiB, with two arenas at
-  // 111-116 MiB and no slower. A no-op when jemalloc serves malloc.
+  // 108-116 MiB and no slower. A no-op when jemalloc serves malloc.
   ::mallopt(M_ARENA_MAX, 2);
 }
 

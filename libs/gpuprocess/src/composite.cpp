@@ -9,6 +9,7 @@
 
 #include "gl.h"
 #include "gl_program.h"
+#include "relief/geo/tangent_plane.h"
 
 namespace relief::gpuprocess {
 
@@ -114,7 +115,7 @@ void main() {
 }
 )";
 
-constexpr double kMetresPerDegree = 6378137.0 * 3.14159265358979323846 / 180;
+constexpr double kMetresPerDegree = geo::kTangentMetresPerDegree;  // as the CPU's lens distance
 
 struct Texture2D {
   GLuint id = 0;

@@ -8,15 +8,19 @@
 #include <cmath>
 #include <numbers>
 
+#include "relief/geo/ellipsoid.h"
+
 namespace relief::geo {
+
+// Metres per degree of arc on that sphere.
+inline constexpr double kTangentMetresPerDegree = wgs84::kSemiMajorAxis * std::numbers::pi / 180;
 
 // Metres from (lon0, lat0) to (lon, lat), degrees, across the antimeridian too.
 inline double tangent_plane_distance_m(double lon0, double lat0, double lon, double lat) {
-  constexpr double kMetresPerDegree = 6378137.0 * std::numbers::pi / 180;
   double dlon = lon - lon0;
   dlon -= 360 * std::round(dlon / 360);
-  const double x = dlon * kMetresPerDegree * std::cos(lat0 * std::numbers::pi / 180);
-  const double y = (lat - lat0) * kMetresPerDegree;
+  const double x = dlon * kTangentMetresPerDegree * std::cos(lat0 * std::numbers::pi / 180);
+  const double y = (lat - lat0) * kTangentMetresPerDegree;
   return std::hypot(x, y);
 }
 
