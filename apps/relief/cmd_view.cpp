@@ -63,8 +63,9 @@ options:
   --screenshot FILE  write the last frame (terrain only) as PNG at exit
   --screenshot-dir DIR  where F12 writes relief_NNNN.png (default .)
   --no-panels        start with the panels hidden
-  --overlap          refine the next frame while the GL draws this one, and
-                     swap this one after that (docs/viewer.md, "Overlap")
+  --no-overlap       wait for the GL to draw each frame and swap it before the
+                     next (by default the next frame is refined while the GL
+                     draws this one, and swaps it: docs/viewer.md, "Overlap")
   --no-vsync         do not wait for the display's refresh
   --fov, --exaggeration, --lod, --sky, --gpu-budget, --cache, --cache-size
                      as relief render
@@ -153,7 +154,7 @@ Result<window::ViewerOptions> viewer_options(const Args& args, const RenderSetup
   o.record = args.get("--record").has_value();
   o.screenshot_dir = args.get("--screenshot-dir").value_or(".");
   o.panels = !args.has("--no-panels");
-  o.overlap = args.has("--overlap");
+  o.overlap = !args.has("--no-overlap");
   o.collect_frames = args.get("--stats").has_value();
   return o;
 }
@@ -306,7 +307,7 @@ int run_view(const std::vector<std::string>& command_line) {
                                               {"--screenshot-dir"},
                                               {"--export-movie"},
                                               {"--no-panels", "", false},
-                                              {"--overlap", "", false},
+                                              {"--no-overlap", "", false},
                                               {"--no-vsync", "", false}}),
                           "view");
   if (!args) return report_error(args.error().message);

@@ -487,5 +487,45 @@ TEST(Refine, AStaticCameraReusesEveryQuadAndAJumpNone) {
   }
 }
 
+// A camera too fast for its decisions to be reused: after a few such frames
+// the history stops recording (recording costs more than it saves), so the
+// camera's first still frames reuse nothing; a while later a still camera
+// reuses every decision again. Every frame draws the mesh of a fresh
+// refinement, with the store's cache (side heights of the last frame's
+// quads reused) and without.
+TEST(Refine, AFastCameraPutsTheHistoryToSleepForAWhile) {
+  Terrain& t = pyrenees();
+  RefineHistory history;
+  RefineOptions o;
+  o.cache = &t.cache;
+  o.history = &history;
+  int reused_all_at = -1;
+  for (int frame = 0; frame < 30 && reused_all_at < 0; ++frame) {
+    SCOPED_TRACE(frame);
+    const double range = 30000 - 800.0 * std::min(frame, 4);  // fast, then still from frame 4
+    auto view =
+        make_view(look_at(1.45, 42.55, 1500, range, 20 + std::min(frame, 4), -35, 60, 640, 480));
+    ASSERT_TRUE(view);
+    const Selection s = select(t, *view, 1.0);
+    auto m = refine(*view, t.terrain, s, o);
+    ASSERT_TRUE(m) << m.error().message;
+    ASSERT_EQ(m->indices, refined(t, *view, s, 1.0, RefineVariant::kTopDown).indices);
+    if (frame >= 1 && frame <= 4) {  // and of one with nothing cached (side heights made afresh)
+      auto alone = refine(*view, t.terrain, s, RefineOptions{});
+      ASSERT_TRUE(alone) << alone.error().message;
+      ASSERT_EQ(m->indices, alone->indices);
+    }
+    if (frame == 5) {
+      // The same view as frame 4: a recording history would reuse every quad.
+      EXPECT_EQ(m->stats.quads_reused, 0u);
+      EXPECT_EQ(m->stats.marks_reused, 0u);
+    }
+    if (frame > 5 && m->stats.marks_evaluated == 0 && m->stats.marks_reused > 0) {
+      reused_all_at = frame;  // the last frame's decisions, none evaluated
+    }
+  }
+  EXPECT_GT(reused_all_at, 5);
+}
+
 }  // namespace
 }  // namespace relief::lod

@@ -24,6 +24,68 @@
 
 namespace relief::lod {
 
+namespace {
+
+// Range maxima over the heights by which the vertices of one side move when
+// they take the coarser neighbour's data (a sparse table).
+class SideMax {
+ public:
+  void build(const std::vector<float>& values) {
+    table_.assign(1, values);
+    for (size_t w = 1; 2 * w <= values.size(); w *= 2) {
+      const std::vector<float>& prev = table_.back();
+      std::vector<float> next(values.size() - 2 * w + 1);
+      for (size_t i = 0; i < next.size(); ++i) next[i] = std::max(prev[i], prev[i + w]);
+      table_.push_back(std::move(next));
+    }
+  }
+  bool empty() const { return table_.empty(); }
+  const std::vector<float>& values() const {
+    static const std::vector<float> none;
+    return table_.empty() ? none : table_[0];
+  }
+  // Largest value in [a, b], clamped to the side.
+  float max(int32_t a, int32_t b) const {
+    const int32_t last = static_cast<int32_t>(table_[0].size()) - 1;
+    a = std::max(a, 0);
+    b = std::min(b, last);
+    if (a > b) return 0;
+    const int level = std::bit_width(static_cast<uint32_t>(b - a + 1)) - 1;
+    const auto& row = table_[static_cast<size_t>(level)];
+    return std::max(row[static_cast<size_t>(a)], row[static_cast<size_t>(b - (1 << level) + 1)]);
+  }
+
+ private:
+  std::vector<std::vector<float>> table_;
+};
+
+// How far the vertices of a quad's sides move by taking the coarser
+// neighbour's data, per side (west, east, north, south; empty where none
+// do), and what they were computed from: the same for every frame that
+// selects the quad with the same coarser sides and the same data.
+struct SideEdges {
+  std::array<SideMax, 4> side;
+};
+
+bool same_window(const DataWindow& a, const DataWindow& b) {
+  return a.tile == b.tile && a.x0 == b.x0 && a.y0 == b.y0 && a.width == b.width &&
+         a.height == b.height;
+}
+
+struct EdgeInputs {
+  TilePtr own_tile, parent_tile;  // held: compared by address
+  DataWindow own, parent;
+  uint8_t coarse_sides = 0, coarse_corners = 0;
+
+  bool operator==(const EdgeInputs& o) const {
+    return own_tile == o.own_tile && parent_tile == o.parent_tile && same_window(own, o.own) &&
+           same_window(parent, o.parent) && coarse_sides == o.coarse_sides &&
+           coarse_corners == o.coarse_corners;
+  }
+};
+
+}  // namespace
+
 struct RefineCache::Impl {
   std::mutex mutex;  // the render thread and the loader's threads
   uint64_t budget = 0, bytes = 0;
@@ -34,6 +96,36 @@ struct RefineCache::Impl {
     bool prepared = false;  // off the render thread, not used by a frame yet
   };
   std::unordered_map<geo::TileKey, Entry, geo::TileKeyHash> entries;
+  // The side heights of the last frame's quads (Refiner::prepare_edges: a
+  // few hundred bilinear heights and a range table per quad, a tenth of a
+  // fast camera's refinement when made every frame), and this frame's.
+  struct Edges {
+    EdgeInputs inputs;
+    std::shared_ptr<const SideEdges> edges;
+  };
+  std::unordered_map<geo::TileKey, Edges, geo::TileKeyHash> last_edges, edges;
+
+  std::shared_ptr<const SideEdges> find_edges(const geo::TileKey& key, const EdgeInputs& in) {
+    std::lock_guard lock(mutex);
+    for (auto* map : {&edges, &last_edges}) {
+      if (auto it = map->find(key); it != map->end() && it->second.inputs == in) {
+        edges[key] = it->second;
+        return it->second.edges;
+      }
+    }
+    return nullptr;
+  }
+  void keep_edges(const geo::TileKey& key, const EdgeInputs& in,
+                  std::shared_ptr<const SideEdges> e) {
+    std::lock_guard lock(mutex);
+    edges[key] = {in, std::move(e)};
+  }
+  // What the next frame may reuse: this frame's.
+  void end_frame() {
+    std::lock_guard lock(mutex);
+    last_edges.swap(edges);
+    edges.clear();
+  }
 
   bool contains(const geo::TileKey& key) {
     std::lock_guard lock(mutex);
@@ -108,7 +200,7 @@ struct QuadDecisions {
   uint8_t parent_data_sides = 0, parent_data_corners = 0;
   double level_error = 0;
   std::shared_ptr<const DiamondErrors> errors;  // held: compared by address
-  std::array<std::vector<float>, 4> edges;
+  std::shared_ptr<const SideEdges> edges;
   std::vector<DecisionBlock> blocks;
   std::vector<uint32_t> halves;
   // Frames in a row in which none of its blocks was reused: from kIdle on,
@@ -139,6 +231,15 @@ struct RefineHistory::Impl {
   uint64_t unresolved = 0;
   double max_unresolved_pixels = 0;
   std::vector<geo::TileKey> split_wanted;
+  // A fast camera reuses few decisions and recording them costs more than
+  // they save (a fifth of a refinement at 8 px on bench/view's Pyrenees
+  // flight, reusing 19 %): after frames that reused under kMinReused of
+  // their criteria (judge_reuse), the next `dormant` frames neither reuse
+  // nor record; then one frame records and the next is judged again.
+  uint32_t dormant = 0;
+  bool judged = false;  // the next frame's reuse is judged (it follows a recording frame)
+  uint32_t low = 0;     // judged frames in a row under kMinReused
+  bool woke = false;    // no frame reused enough since the last dormant spell
 };
 
 RefineHistory::RefineHistory() : impl_(std::make_unique<Impl>()) {}
@@ -220,42 +321,34 @@ constexpr uint32_t kIdle = 2, kProbe = 4;
 // loses ~1e-8).
 constexpr double kSafety = 1e-9, kSlackMetres = 1e-6, kAngleSlack = 1e-7;
 
-// Range maxima over the heights by which the vertices of one side move when
-// they take the coarser neighbour's data (a sparse table).
-class SideMax {
- public:
-  void build(const std::vector<float>& values) {
-    table_.assign(1, values);
-    for (size_t w = 1; 2 * w <= values.size(); w *= 2) {
-      const std::vector<float>& prev = table_.back();
-      std::vector<float> next(values.size() - 2 * w + 1);
-      for (size_t i = 0; i < next.size(); ++i) next[i] = std::max(prev[i], prev[i + w]);
-      table_.push_back(std::move(next));
-    }
-  }
-  bool empty() const { return table_.empty(); }
-  const std::vector<float>& values() const {
-    static const std::vector<float> none;
-    return table_.empty() ? none : table_[0];
-  }
-  // Largest value in [a, b], clamped to the side.
-  float max(int32_t a, int32_t b) const {
-    const int32_t last = static_cast<int32_t>(table_[0].size()) - 1;
-    a = std::max(a, 0);
-    b = std::min(b, last);
-    if (a > b) return 0;
-    const int level = std::bit_width(static_cast<uint32_t>(b - a + 1)) - 1;
-    const auto& row = table_[static_cast<size_t>(level)];
-    return std::max(row[static_cast<size_t>(a)], row[static_cast<size_t>(b - (1 << level) + 1)]);
-  }
-
- private:
-  std::vector<std::vector<float>> table_;
-};
-
 struct SinCos {
   double s = 0, c = 1;
   explicit SinCos(double radians = 0) : s(std::sin(radians)), c(std::cos(radians)) {}
+};
+
+// Quad::steps of every level: the sines and cosines of i cells (i = 0 .. 2n)
+// of the level's cell, the same for every quad of the level and every frame
+// (a thread keeps them: refine()).
+class StepTables {
+ public:
+  const SinCos* of(int level, int32_t n) {
+    if (n != n_) {
+      by_level_.clear();
+      n_ = n;
+    }
+    if (by_level_.size() <= static_cast<size_t>(level)) by_level_.resize(level + 1);
+    std::vector<SinCos>& steps = by_level_[static_cast<size_t>(level)];
+    if (steps.empty()) {
+      const double cell = geo::TileKey{level, 0, 0}.bounds().height() / n;
+      steps.reserve(static_cast<size_t>(2 * n + 1));
+      for (int32_t i = 0; i <= 2 * n; ++i) steps.emplace_back(i * cell * kDegree);
+    }
+    return steps.data();
+  }
+
+ private:
+  int32_t n_ = -1;
+  std::vector<std::vector<SinCos>> by_level_;
 };
 
 struct Quad {
@@ -269,7 +362,7 @@ struct Quad {
   const SinCos* steps = nullptr;
   double level_error = 0;
   std::shared_ptr<const DiamondErrors> errors;  // null: no data, height 0
-  std::array<SideMax, 4> edge;                  // west, east, north, south
+  std::shared_ptr<const SideEdges> edges;       // null: no side takes coarser data
   uint8_t blocking = 0;                         // Side bits: shared with a coarser selected quad
   // Reusing decisions (RefineHistory).
   QuadDecisions* old = nullptr;  // the last record of this quad, if it still applies
@@ -303,13 +396,15 @@ struct Located {
 class Refiner {
  public:
   Refiner(const View& view, TerrainModel& terrain, const Selection& selection,
-          const RefineOptions& options, RefineCache::Impl& cache, SlotMarks& marks)
+          const RefineOptions& options, RefineCache::Impl& cache, SlotMarks& marks,
+          StepTables& steps)
       : view_(view),
         terrain_(terrain),
         selection_(selection),
         o_(options),
         cache_(cache),
         marks_(marks),
+        steps_(steps),
         grid_(grid_of(terrain)),
         top_down_(options.variant == RefineVariant::kTopDown),
         history_(options.history ? &options.history->impl() : nullptr),
@@ -456,7 +551,7 @@ class Refiner {
       r.parent_data_corners = s.parent_data_corners;
       r.level_error = q.level_error;
       r.errors = q.errors;
-      for (size_t k = 0; k < 4; ++k) r.edges[k] = q.edge[k].values();
+      r.edges = q.edges;
       r.idle = q.idle;
       r.blocks.resize(q.blocks.size());
       for (size_t b = 0; b < q.blocks.size(); ++b) {
@@ -528,8 +623,10 @@ class Refiner {
         r.errors != q.errors) {
       return false;
     }
+    if (r.edges == q.edges) return true;
+    if (!r.edges || !q.edges) return false;
     for (size_t k = 0; k < 4; ++k) {
-      if (r.edges[k] != q.edge[k].values()) return false;
+      if (r.edges->side[k].values() != q.edges->side[k].values()) return false;
     }
     return true;
   }
@@ -660,13 +757,7 @@ class Refiner {
     q.cell = q.bounds.height() / n;
     q.west = SinCos(q.bounds.west * kDegree);
     q.north = SinCos(q.bounds.north * kDegree);
-    if (steps_.size() <= static_cast<size_t>(s.key.level)) steps_.resize(s.key.level + 1);
-    std::vector<SinCos>& steps = steps_[static_cast<size_t>(s.key.level)];
-    if (steps.empty()) {
-      steps.reserve(static_cast<size_t>(2 * n + 1));
-      for (int32_t i = 0; i <= 2 * n; ++i) steps.emplace_back(i * q.cell * kDegree);
-    }
-    q.steps = steps.data();
+    q.steps = steps_.of(s.key.level, n);
     q.level_error = RELIEF_TRY(terrain_.level_error(s.key));
     if (q.level_error > 0) {
       // No split makes up for the distance between the level's full mesh
@@ -707,12 +798,15 @@ class Refiner {
 
   // |parent - own| heights of the vertices on sides (and at corners) that take
   // the coarser neighbour's data, as range-maximum tables per side.
+  // The last frame's when it had the same inputs (RefineCache::Impl::edges).
   Status prepare_edges(const SelectedQuad& s, Quad& q) {
     if (!s.coarse_sides && !s.coarse_corners) return {};
     const int32_t n = grid_.n();
     const DataWindow own = terrain_.window(s.key), parent = terrain_.parent_window(s.key);
     const TerrainModel::TilePtr own_tile = RELIEF_TRY(tile_of(own));
     const TerrainModel::TilePtr parent_tile = RELIEF_TRY(tile_of(parent));
+    const EdgeInputs inputs{own_tile, parent_tile, own, parent, s.coarse_sides, s.coarse_corners};
+    if ((q.edges = cache_.find_edges(s.key, inputs))) return {};
     auto at = [&](int side, int32_t t) {
       return side == 0   ? GridPoint{0, t}
              : side == 1 ? GridPoint{2 * n, t}
@@ -750,9 +844,12 @@ class Refiner {
         used |= kSideBits[c.sides[k]];
       }
     }
+    auto edges = std::make_shared<SideEdges>();
     for (int side = 0; side < 4; ++side) {
-      if (used & kSideBits[side]) q.edge[side].build(diff[side]);
+      if (used & kSideBits[side]) edges->side[side].build(diff[side]);
     }
+    q.edges = edges;
+    cache_.keep_edges(s.key, inputs, std::move(edges));
     return {};
   }
 
@@ -882,14 +979,14 @@ class Refiner {
     }
     const int32_t r = d.reach();
     double edge = 0;
-    if (!quad.edge[0].empty() && p.x - r <= 0)
-      edge = std::max<double>(edge, quad.edge[0].max(p.y - r, p.y + r));
-    if (!quad.edge[1].empty() && p.x + r >= 2 * n)
-      edge = std::max<double>(edge, quad.edge[1].max(p.y - r, p.y + r));
-    if (!quad.edge[2].empty() && p.y - r <= 0)
-      edge = std::max<double>(edge, quad.edge[2].max(p.x - r, p.x + r));
-    if (!quad.edge[3].empty() && p.y + r >= n)
-      edge = std::max<double>(edge, quad.edge[3].max(p.x - r, p.x + r));
+    if (const SideEdges* sides = quad.edges.get()) {
+      const std::array<SideMax, 4>& e = sides->side;
+      if (!e[0].empty() && p.x - r <= 0) edge = std::max<double>(edge, e[0].max(p.y - r, p.y + r));
+      if (!e[1].empty() && p.x + r >= 2 * n)
+        edge = std::max<double>(edge, e[1].max(p.y - r, p.y + r));
+      if (!e[2].empty() && p.y - r <= 0) edge = std::max<double>(edge, e[2].max(p.x - r, p.x + r));
+      if (!e[3].empty() && p.y + r >= n) edge = std::max<double>(edge, e[3].max(p.x - r, p.x + r));
+    }
     const double theta = d.hypotenuse() * quad.cell * kDegree;
     const double pad = quad.level_error + edge + kArc * theta * theta / 8;
     const double metres = error + pad;
@@ -1150,11 +1247,11 @@ class Refiner {
   const RefineOptions& o_;
   RefineCache::Impl& cache_;
   SlotMarks& marks_;
+  StepTables& steps_;
   MarkGrid grid_;
   int deepest_ = 0;
   int64_t globe_width_ = 0;
   std::vector<Quad> quads_;
-  std::vector<std::vector<SinCos>> steps_;  // Quad::steps by level
   bool top_down_;
   std::vector<Located> stack_, work_;
   RefineStats stats_;
@@ -1169,6 +1266,32 @@ class Refiner {
 }  // namespace
 
 namespace {
+
+// A history whose frames reused less than this share of their decisions
+// kLowFrames times in a row (once, right after a dormant spell) goes dormant
+// for kDormantFrames frames (RefineHistory::Impl::dormant).
+constexpr double kMinReused = 0.25;
+constexpr uint32_t kLowFrames = 3, kDormantFrames = 14;
+
+void judge_reuse(RefineHistory::Impl& h, const RefineStats& s) {
+  if (!h.judged) {  // the frame recorded: the next one is judged
+    h.judged = true;
+    return;
+  }
+  const uint64_t all = s.marks_evaluated + s.marks_reused;
+  if (all == 0 || static_cast<double>(s.marks_reused) >= kMinReused * static_cast<double>(all)) {
+    h.low = 0;
+    h.woke = false;
+    return;
+  }
+  if (++h.low >= (h.woke ? 1 : kLowFrames)) {
+    h.dormant = kDormantFrames;
+    h.low = 0;
+    h.judged = false;
+    h.woke = true;
+  }
+}
+
 double thread_cpu_seconds() {
   timespec t{};
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
@@ -1182,16 +1305,23 @@ Result<RefinedMesh> refine(const View& view, TerrainModel& terrain, const Select
   const double cpu_start = thread_cpu_seconds();
   RefineCache local(0);
   RefineCache& cache = options.cache ? *options.cache : local;
-  // The marks' blocks stay with the thread for its next frame.
+  // The marks' blocks and the step tables stay with the thread for its next frame.
   thread_local SlotMarks marks;
+  thread_local StepTables steps;
   thread_local size_t last_indices = 0;
-  Refiner r(view, terrain, selection, options, cache.impl(), marks);
+  RefineOptions o = options;
+  RefineHistory::Impl* history = options.history ? &options.history->impl() : nullptr;
+  if (history && history->dormant > 0) {  // decided from scratch, nothing recorded
+    --history->dormant;
+    o.history = nullptr;
+  }
+  Refiner r(view, terrain, selection, o, cache.impl(), marks, steps);
   RELIEF_CHECK(r.prepare());
   RefinedMesh mesh;
   if (r.reuse_all()) {
     mesh = r.reused_mesh();
   } else {
-    if (options.variant == RefineVariant::kTopDown) {
+    if (o.variant == RefineVariant::kTopDown) {
       r.top_down();
     } else {
       r.bottom_up();
@@ -1200,6 +1330,8 @@ Result<RefinedMesh> refine(const View& view, TerrainModel& terrain, const Select
     last_indices = mesh.indices.size();
   }
   r.save_history(mesh);
+  cache.impl().end_frame();
+  if (o.history) judge_reuse(*history, mesh.stats);
   mesh.stats.seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   mesh.stats.cpu_seconds = thread_cpu_seconds() - cpu_start;

@@ -46,11 +46,11 @@ struct ViewerOptions {
   // Overlap (docs/viewer.md): while frames follow one another at once, a
   // frame is swapped to the screen by the next one, after that one's
   // selection and refinement, which run while the GL (llvmpipe's threads)
-  // still draws it; the screen is then one frame behind the target. Off
-  // (the default: on the loaded 2-core machine it was slower as often as
-  // faster, docs/viewer.md): every frame waits for the GL and is swapped
-  // before frame() returns.
-  bool overlap = false;
+  // still draws it; the screen is then one frame behind the target. On by
+  // default: on a quiet 2-core machine it gave 20 % more frames per second
+  // on both bench/view flights (docs/viewer.md). Off: every frame waits for
+  // the GL and is swapped before frame() returns.
+  bool overlap = true;
   // Idle: once the camera is still (no input, not recording: the path
   // would glide through the pause; not playing a path), frame() waits up to
   // this long for an event instead of drawing. A complete frame (at the
