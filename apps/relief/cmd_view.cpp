@@ -186,7 +186,8 @@ nlohmann::json stats_json(const window::ViewerSummary& s, const std::string& ren
                         {"cpu_ms", f.refine_cpu_ms},
                         {"marks_evaluated", f.marks_evaluated},
                         {"marks_reused", f.marks_reused},
-                        {"quads_reused", f.quads_reused}}},
+                        {"quads_reused", f.quads_reused},
+                        {"tiles_measured", f.tiles_measured}}},
                       {"process_cpu_ms", f.process_cpu_ms}});
   }
   auto fps = [](double ms) { return ms > 0 ? 1e3 / ms : 0.0; };

@@ -346,6 +346,7 @@ Result<bool> Viewer::frame() {
       f.marks_evaluated = report.refine->marks_evaluated;
       f.marks_reused = report.refine->marks_reused;
       f.quads_reused = report.refine->quads_reused;
+      f.tiles_measured = report.refine->tiles_measured;
     }
   }
   if (stream::TileLoader* loader = v.scene->elevation_loader()) {

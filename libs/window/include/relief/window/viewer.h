@@ -91,6 +91,9 @@ struct ViewerFrame {
   double refine_ms = 0, refine_cpu_ms = 0;
   uint64_t marks_evaluated = 0, marks_reused = 0;
   uint32_t quads_reused = 0;
+  // Data tiles whose diamond errors the refinement measured on the render
+  // thread (not prepared by the loaders, or dropped by the cache's budget).
+  uint32_t tiles_measured = 0;
   // Where the frame went, on the clock (ms): the scene's selection with its
   // requests, the renderer's preparation (records, tile textures and their
   // uploads), issuing the draw calls (submit: llvmpipe shades vertices and
