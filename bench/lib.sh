@@ -98,7 +98,8 @@ bench_main() {
     return 0
   fi
   local old
-  for old in docs/bench-"$BENCH_NAME"-*.txt; do
+  # Only this bench's dated logs (bench-stream-2026-... but not bench-stream-himalaya-...).
+  for old in docs/bench-"$BENCH_NAME"-[0-9][0-9][0-9][0-9]-[0-9][0-9]-[0-9][0-9].txt; do
     [[ $old == "$log" || ! -e $old ]] || rm -f "$old"
   done
   rm -f "$md"  # published into docs/benchmarks.md instead
