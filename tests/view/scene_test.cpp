@@ -8,6 +8,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <functional>
+#include <optional>
 #include <thread>
 #include <tuple>
 
@@ -51,6 +53,32 @@ class SceneTest : public ::testing::Test {
       std::this_thread::sleep_for(1ms);
     }
     ASSERT_TRUE(s.elevation_loader()->idle());
+  }
+
+  // Interactive frames of `camera` until one is complete (64 at most, the
+  // loaders idle between frames): the last frame, and the data tiles whose
+  // diamond errors the frames measured on the render thread or found
+  // prepared by the loaders' threads. `each` sees every frame.
+  struct Converged {
+    std::optional<FrameReport> last;
+    uint64_t measured = 0, prepared = 0;
+  };
+  Converged draw_until_complete(Scene& s, const lod::Camera& camera,
+                                const std::function<void(const FrameReport&)>& each = {}) {
+    Converged c;
+    for (int frame = 0; frame < 64 && !(c.last && c.last->complete); ++frame) {
+      if (frame > 0) wait_idle(s);
+      auto f = s.draw(camera, *target_);
+      EXPECT_TRUE(f) << (f ? std::string() : f.error().message);
+      if (!f) break;
+      if (f->refine) {
+        c.measured += f->refine->tiles_measured;
+        c.prepared += f->refine->tiles_prepared;
+      }
+      if (each) each(*f);
+      c.last = *f;
+    }
+    return c;
   }
 
   ManualClock clock_;
@@ -102,21 +130,11 @@ TEST_F(SceneTest, InteractiveFramesNeverWaitAndConvergeToTheCompleteFrame) {
 TEST_F(SceneTest, InteractiveFramesRefineWithDiamondErrorsPreparedOffTheRenderThread) {
   auto live = scene(true);
   ASSERT_TRUE(live);
-  uint64_t measured = 0, prepared = 0;
-  std::optional<FrameReport> last;
-  for (int frame = 0; frame < 64 && !(last && last->complete); ++frame) {
-    if (frame > 0) wait_idle(*live);
-    auto f = live->draw(kOblique, *target_);
-    ASSERT_TRUE(f) << f.error().message;
-    ASSERT_TRUE(f->refine);
-    measured += f->refine->tiles_measured;
-    prepared += f->refine->tiles_prepared;
-    last = *f;
-  }
-  ASSERT_TRUE(last && last->complete);
-  EXPECT_EQ(measured, 0u);
-  EXPECT_GT(prepared, 4u);  // level 0 and the tiles of the frames that followed
-  EXPECT_LE(prepared, last->refine_cache_tiles);
+  const Converged c = draw_until_complete(*live, kOblique);
+  ASSERT_TRUE(c.last && c.last->complete && c.last->refine);
+  EXPECT_EQ(c.measured, 0u);
+  EXPECT_GT(c.prepared, 4u);  // level 0 and the tiles of the frames that followed
+  EXPECT_LE(c.prepared, c.last->refine_cache_tiles);
 
   auto complete = scene(false);
   ASSERT_TRUE(complete);
@@ -141,13 +159,7 @@ TEST_F(SceneTest, EdgeMarkScenesLeaveTheQuadsExactErrorsToWhoeverAsks) {
     SCOPED_TRACE(mode == lod::LodMode::quads ? "quads" : "edge marks");
     auto live = scene(true, mode);
     ASSERT_TRUE(live);
-    std::optional<FrameReport> last;
-    for (int frame = 0; frame < 64 && !(last && last->complete); ++frame) {
-      if (frame > 0) wait_idle(*live);
-      auto f = live->draw(kOblique, *target_);
-      ASSERT_TRUE(f) << f.error().message;
-      last = *f;
-    }
+    const std::optional<FrameReport> last = draw_until_complete(*live, kOblique).last;
     ASSERT_TRUE(last && last->complete);
     lod::TerrainModel& terrain = live->terrain();
     if (mode == lod::LodMode::quads) {
@@ -198,19 +210,10 @@ TEST_F(SceneTest, FusedLayersRefineWithDiamondErrorsOfTheFusedTiles) {
 
   auto live = scene(true, lod::LodMode::edge_marks, &*fused);
   ASSERT_TRUE(live);
-  uint64_t measured = 0, prepared = 0;
-  std::optional<FrameReport> last;
-  for (int frame = 0; frame < 64 && !(last && last->complete); ++frame) {
-    if (frame > 0) wait_idle(*live);
-    auto f = live->draw(seam, *target_);
-    ASSERT_TRUE(f) << f.error().message;
-    measured += f->refine->tiles_measured;
-    prepared += f->refine->tiles_prepared;
-    last = *f;
-  }
-  ASSERT_TRUE(last && last->complete);
-  EXPECT_EQ(measured, 0u);
-  EXPECT_GT(prepared, 4u);
+  const Converged c = draw_until_complete(*live, seam);
+  ASSERT_TRUE(c.last && c.last->complete);
+  EXPECT_EQ(c.measured, 0u);
+  EXPECT_GT(c.prepared, 4u);
 
   auto complete = scene(false, lod::LodMode::edge_marks, &*fused);
   ASSERT_TRUE(complete);
@@ -250,13 +253,7 @@ TEST_F(SceneTest, LayersOfDifferentDepthsConvergeToTheCompleteFrame) {
 
   auto live = scene(true, lod::LodMode::quads, &*fused);
   ASSERT_TRUE(live);
-  std::optional<FrameReport> last;
-  for (int frame = 0; frame < 64 && !(last && last->complete); ++frame) {
-    if (frame > 0) wait_idle(*live);
-    auto f = live->draw(seam, *target_);
-    ASSERT_TRUE(f) << f.error().message;
-    last = *f;
-  }
+  const std::optional<FrameReport> last = draw_until_complete(*live, seam).last;
   ASSERT_TRUE(last && last->complete);
   auto complete = scene(false, lod::LodMode::quads, &*fused);
   ASSERT_TRUE(complete);
@@ -278,19 +275,10 @@ TEST_F(SceneTest, LayersOfDifferentDepthsConvergeToTheCompleteFrame) {
 
   auto refining = scene(true, lod::LodMode::edge_marks, &*fused);
   ASSERT_TRUE(refining);
-  uint64_t measured = 0, prepared = 0;
-  last.reset();
-  for (int frame = 0; frame < 64 && !(last && last->complete); ++frame) {
-    if (frame > 0) wait_idle(*refining);
-    auto f = refining->draw(seam, *target_);
-    ASSERT_TRUE(f) << f.error().message;
-    measured += f->refine->tiles_measured;
-    prepared += f->refine->tiles_prepared;
-    last = *f;
-  }
-  ASSERT_TRUE(last && last->complete);
-  EXPECT_EQ(measured, 0u);
-  EXPECT_GT(prepared, 4u);
+  const Converged c = draw_until_complete(*refining, seam);
+  ASSERT_TRUE(c.last && c.last->complete);
+  EXPECT_EQ(c.measured, 0u);
+  EXPECT_GT(c.prepared, 4u);
   auto refined = scene(false, lod::LodMode::edge_marks, &*fused);
   ASSERT_TRUE(refined);
   ASSERT_TRUE(refined->draw(seam, *target_));
