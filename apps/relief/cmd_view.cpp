@@ -50,6 +50,9 @@ options:
   --mode M           orbit (default), aircraft, walk or motorbike
   --pixel-error E    largest screen-space error in pixels when still (default 1)
   --no-speed-lod     do not relax the pixel error while the view moves
+  --target-fps F     while the view moves and frames take longer than 1/F s,
+                     relax the pixel error further, up to 3 times (default 0:
+                     never; a still view is always drawn at --pixel-error)
   --play PATH.json   play a camera path (the JSON that relief render --path reads)
   --exit-when-done   quit once the path has ended (at once without --play) and a
                      frame is complete, or --until-complete seconds later
@@ -146,6 +149,10 @@ Result<window::ViewerOptions> viewer_options(const Args& args, const RenderSetup
     o.record_fps = path.fps;
   }
   o.speed_lod.enabled = !args.has("--no-speed-lod");
+  if (auto fps = RELIEF_TRY(args.get_double("--target-fps"))) {
+    if (!(*fps >= 0 && *fps <= 1000)) return fail("--target-fps: must be in [0, 1000]");
+    o.frame_budget.target_ms = *fps > 0 ? 1e3 / *fps : 0;
+  }
   o.exit_when_done = args.has("--exit-when-done");
   if (auto s = RELIEF_TRY(args.get_double("--until-complete"))) {
     if (!(*s >= 0 && *s <= 3600)) return fail("--until-complete: must be in [0, 3600] s");
@@ -175,6 +182,8 @@ nlohmann::json stats_json(const window::ViewerSummary& s, const std::string& ren
                       {"present_ms", f.present_ms},
                       {"tiles_uploaded", f.tiles_uploaded},
                       {"pixel_error", f.pixel_error},
+                      {"speed_factor", f.speed_factor},
+                      {"budget_factor", f.budget_factor},
                       {"camera", {c.lon, c.lat, c.height, c.heading, c.pitch, c.roll}},
                       {"quads", f.quads},
                       {"triangles", f.triangles},
@@ -299,6 +308,7 @@ int run_view(const std::vector<std::string>& command_line) {
   auto args = Args::parse(argv,
                           with_scene_options({{"--mode"},
                                               {"--no-speed-lod", "", false},
+                                              {"--target-fps"},
                                               {"--play"},
                                               {"--exit-when-done", "", false},
                                               {"--until-complete"},

@@ -423,6 +423,44 @@ TEST_F(WindowTest, AFramesTimeIsItsOwnPeriod) {
   EXPECT_DOUBLE_EQ(s.p99_frame_ms, 30);
 }
 
+// A frame budget: frames three times over it while a path plays relax the
+// threshold beyond the speed's, by at most x1.3 a frame and x3 in all; once
+// the path has ended the threshold returns to the still one and the view
+// completes. The frames' times are the test's clock.
+TEST_F(WindowTest, FramesOverTheirBudgetCoarsenAMovingViewButNotTheStillOne) {
+  ManualClock clock;
+  ViewerOptions o;
+  o.mode = view::ControlMode::playback;
+  lod::Camera end = kCamera;
+  end.lon += 0.05, end.heading += 30;
+  o.controller.path = {{0, kCamera}, {1, end}};
+  o.start = kCamera;
+  o.frame_budget.target_ms = 1000.0 / 30;
+  o.collect_frames = true;
+  o.idle_wait_seconds = 0;
+  auto v = viewer(o, clock);
+  ASSERT_TRUE(v);
+  for (int i = 0; i < 60 && !(i > 20 && v->summary().complete); ++i) {
+    ASSERT_TRUE(v->frame());
+    clock.advance(100ms);
+  }
+  const ViewerSummary s = v->summary();
+  ASSERT_GE(s.frames_list.size(), 12u);
+  double previous = 1;
+  for (size_t i = 1; i < 10; ++i) {  // moving (the path's second), every frame 100 ms
+    const ViewerFrame& f = s.frames_list[i];
+    EXPECT_GT(f.budget_factor, 1) << i;
+    EXPECT_LE(f.budget_factor, std::min(3.0, previous * 1.3) + 1e-12) << i;
+    EXPECT_GT(f.speed_factor, 1) << i;
+    EXPECT_NEAR(f.pixel_error, f.speed_factor * f.budget_factor, 1e-12) << i;
+    previous = f.budget_factor;
+  }
+  EXPECT_EQ(previous, 3);
+  EXPECT_EQ(s.frames_list.back().budget_factor, 1);
+  EXPECT_EQ(s.frames_list.back().pixel_error, 1);
+  EXPECT_TRUE(s.complete);
+}
+
 // GLFW reports the cursor in window coordinates; frames and picking use
 // framebuffer pixels, twice as many per axis at a content scale of 2.
 TEST(WindowInput, CursorPositionsAreScaledToFramebufferPixels) {
@@ -804,6 +842,8 @@ TEST(ViewCommand, BadInputIsAOneLineError) {
   std::ofstream(not_json) << "fps: 30";
   expect_error(run_relief({"view", store, "--play", not_json.string()}), not_json.string());
   expect_error(run_relief({"view", store, "--mode", "glider"}), "--mode");
+  expect_error(run_relief({"view", store, "--target-fps", "-5"}), "--target-fps");
+  expect_error(run_relief({"view", store, "--target-fps", "fast"}), "--target-fps");
   expect_error(run_relief({"view", store, "--play", not_json.string(), "--mode", "walk"}),
                "--play");
   expect_error(run_relief({"view", store, "--export-movie", (dir / "flight.png").string()}),

@@ -41,7 +41,14 @@ void level_of_detail(Viewer::Impl& v) {
     v.options.speed_lod.enabled = relax;
     v.speed_lod = view::SpeedLod(v.options.speed_lod);
   }
-  text(fmt::format("threshold now {:.2f} px (x{:.2f})", v.threshold, v.speed_lod.factor()));
+  auto fps = static_cast<float>(
+      v.options.frame_budget.target_ms > 0 ? 1e3 / v.options.frame_budget.target_ms : 0.0);
+  if (ImGui::SliderFloat("target fps", &fps, 0.0f, 120.0f, fps > 0 ? "%.0f" : "off")) {
+    v.options.frame_budget.target_ms = fps > 0 ? 1e3 / fps : 0;
+    v.frame_budget = view::FrameBudget(v.options.frame_budget);
+  }
+  text(fmt::format("threshold now {:.2f} px (speed x{:.2f}, frame budget x{:.2f})", v.threshold,
+                   v.speed_lod.factor(), v.frame_budget.factor()));
   if (ImGui::Checkbox("wireframe", &v.scene_options.render.wireframe)) {
     v.scene->set_render_options(v.scene_options.render);
   }

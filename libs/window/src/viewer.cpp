@@ -270,6 +270,7 @@ Result<bool> Viewer::frame() {
     // its frame time (idle waits between them left out).
     const double period_ms = (seconds_between(v.drawn_start, now) - v.waited) * 1e3;
     v.frame_ms.push_back(period_ms);
+    v.last_frame_ms = period_ms;
     v.recent_ms.push_back(period_ms);
     if (v.recent_ms.size() > kRecentFrames) v.recent_ms.pop_front();
     if (v.options.collect_frames) {
@@ -295,8 +296,12 @@ Result<bool> Viewer::frame() {
   v.move_dragged_lens(camera, ground);
   const double still = v.scene_options.selection.pixel_error;
   const double above = camera.height - ground(camera.lon, camera.lat).value_or(0.0);
-  v.threshold = v.speed_lod.threshold(still, dt, v.controller->angular_speed(),
-                                      v.controller->linear_speed(), std::max(above, 1.0));
+  const double speed_threshold = v.speed_lod.threshold(
+      still, dt, v.controller->angular_speed(), v.controller->linear_speed(), std::max(above, 1.0));
+  // Moving: the controller's speeds, as the speed's relaxation sees them.
+  const bool moving = v.controller->angular_speed() != 0 || v.controller->linear_speed() != 0;
+  const double budget = v.frame_budget.update(v.last_frame_ms, dt, moving);
+  v.threshold = budget == 1 ? speed_threshold : speed_threshold * budget;
   v.scene->set_pixel_error(v.threshold);
   // The previous frame, if its swap was left to this one: swapped once this
   // frame's selection and refinement are made (they ran while the GL drew it).
@@ -335,6 +340,8 @@ Result<bool> Viewer::frame() {
                         report.draw.triangles_per_pixel(),
                         report.draw.geometry_bytes + report.draw.texture_bytes, report.complete});
     ViewerFrame& f = v.frames.back();
+    f.speed_factor = v.speed_lod.factor();
+    f.budget_factor = v.frame_budget.factor();
     f.select_ms = report.select_seconds * 1e3;
     f.prepare_ms = report.draw.prepare_seconds * 1e3;
     f.gpu_ms = report.draw.gpu_seconds * 1e3;

@@ -55,7 +55,8 @@ struct Viewer::Impl {
         scene_options(so),
         options(o),
         clock(c),
-        speed_lod(o.speed_lod) {}
+        speed_lod(o.speed_lod),
+        frame_budget(o.frame_budget) {}
 
   Window& window;
   const tiles::Store* elevation;  // null: the bare ellipsoid
@@ -68,8 +69,10 @@ struct Viewer::Impl {
   bool imagery_on = true, imagery_wanted = true;  // the panel sets wanted; the next frame acts
   std::unique_ptr<view::Controller> controller;
   view::SpeedLod speed_lod;
-  double threshold = 1;  // this frame's pixel error
-  bool frozen = false;   // the LOD panel's "freeze selection"
+  view::FrameBudget frame_budget;
+  double last_frame_ms = 0;  // the previous frame's period (0: none yet)
+  double threshold = 1;      // this frame's pixel error
+  bool frozen = false;       // the LOD panel's "freeze selection"
 
   std::optional<Clock::TimePoint> start, last;  // of the session; of the last frame() or frame
   double last_cpu = 0;                          // the process's CPU time at drawn_start, seconds

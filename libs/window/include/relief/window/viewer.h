@@ -22,6 +22,7 @@
 #include "relief/base/result.h"
 #include "relief/lod/camera_path.h"
 #include "relief/view/controller.h"
+#include "relief/view/frame_budget.h"
 #include "relief/view/path_file.h"
 #include "relief/view/scene.h"
 #include "relief/view/speed_lod.h"
@@ -34,6 +35,10 @@ struct ViewerOptions {
   lod::Camera start;                   // viewport: replaced by the window's
   view::ControllerOptions controller;  // playback: the path
   view::SpeedLodOptions speed_lod;
+  // While the view moves, frames over this budget relax the threshold
+  // further (view/frame_budget.h); a still view is drawn at the still
+  // threshold whatever it costs. target_ms 0: no budget.
+  view::FrameBudgetOptions frame_budget;
   // Scripted sessions: quit once the path has ended (at once without one)
   // and a frame is complete, or `until_complete` seconds after it ended.
   bool exit_when_done = false;
@@ -78,7 +83,7 @@ struct ViewerFrame {
   // idle waits between them left out; 0 for the last frame (no next one).
   double frame_ms = 0;
   double draw_ms = 0;      // the scene's frame: selection to the end of drawing
-  double pixel_error = 0;  // the threshold used (speed-relaxed)
+  double pixel_error = 0;  // the threshold used (relaxed by speed and frame budget)
   lod::Camera camera;
   uint32_t quads = 0;
   uint64_t triangles = 0;
@@ -108,6 +113,8 @@ struct ViewerFrame {
   // over the same period, idle waits included (the loaders work in them):
   // what a frame costs on a shared machine. 0 for the last frame.
   double process_cpu_ms = 0;
+  // The relaxations in pixel_error: the speed's and the frame budget's factors.
+  double speed_factor = 1, budget_factor = 1;
 };
 
 struct ViewerSummary {
