@@ -28,8 +28,8 @@ struct TrianglePlane {
 
 // The largest |plane - full mesh| over the full-mesh vertices (x + y even)
 // of row y from x = from to x = to.
-double row_error(const TrianglePlane& plane, const float* row, int32_t y, int32_t from,
-                 int32_t to) {
+inline double row_error(const TrianglePlane& plane, const float* row, int32_t y, int32_t from,
+                        int32_t to) {
   // Two maxima in turn: independent chains of comparisons.
   double even = 0, odd = 0;
   const double base = plane.ha + plane.gy * (y - plane.a.y);
@@ -63,6 +63,13 @@ double diamond_error(const MarkGrid& grid, const std::vector<float>& fm, GridPoi
   auto side_of = [&](GridPoint p) -> const TrianglePlane& {
     return (cross(e0, e1, p) > 0) == (side0 > 0) ? planes[0] : planes[1];
   };
+  // The hypotenuse is a straight line: the points before it in a row (or,
+  // for a horizontal one, the rows above it) are all on one side.
+  const bool horizontal = d.kind == MarkKind::kAxisX;
+  const TrianglePlane& before =
+      side_of(horizontal ? GridPoint{c.x, c.y - 1} : GridPoint{c.x - 1, c.y});
+  const TrianglePlane& after =
+      side_of(horizontal ? GridPoint{c.x, c.y + 1} : GridPoint{c.x + 1, c.y});
   const int32_t r = d.size;
   const int32_t x0 = std::max(0, c.x - r), x1 = std::min(2 * grid.n(), c.x + r);
   const int32_t y0 = std::max(0, c.y - r), y1 = std::min(grid.n(), c.y + r);
@@ -76,18 +83,19 @@ double diamond_error(const MarkGrid& grid, const std::vector<float>& fm, GridPoi
     const int32_t reach = diagonal ? r : r - std::abs(dy);
     const int32_t xa = std::max(x0, c.x - reach), xb = std::min(x1, c.x + reach);
     const float* row = &fm[grid.id({0, y})];
-    if (d.kind == MarkKind::kAxisX) {  // a row wholly on one side, or the hypotenuse
-      worst = std::max(worst, row_error(dy == 0 ? on_line : side_of({c.x, y}), row, y, xa, xb));
+    if (horizontal) {  // a row wholly on one side, or the hypotenuse
+      worst = std::max(worst, row_error(dy == 0  ? on_line
+                                        : dy < 0 ? before
+                                                 : after,
+                                        row, y, xa, xb));
       continue;
     }
     const int32_t xc = !diagonal ? c.x : main_diagonal ? c.x + dy : c.x - dy;
-    if (xa < xc)
-      worst = std::max(worst, row_error(side_of({xc - 1, y}), row, y, xa, std::min(xb, xc - 1)));
+    if (xa < xc) worst = std::max(worst, row_error(before, row, y, xa, std::min(xb, xc - 1)));
     if (xa <= xc && xc <= xb && ((xc + y) & 1) == 0) {
       worst = std::max(worst, std::abs(on_line.at(xc, y) - row[xc]));
     }
-    if (xb > xc)
-      worst = std::max(worst, row_error(side_of({xc + 1, y}), row, y, std::max(xa, xc + 1), xb));
+    if (xb > xc) worst = std::max(worst, row_error(after, row, y, std::max(xa, xc + 1), xb));
   }
   return worst;
 }
@@ -115,36 +123,79 @@ float round_up(double v) {
   return f;
 }
 
+// The full mesh's heights at its vertices: points with x + y even (sample
+// centres and corners), the bilinear interpolation of the vertex shader.
+// Into `fm` (grid.count() values; the others are not written).
+void full_mesh_heights(const MarkGrid& grid, const tiles::Raster& tile, int border,
+                       std::vector<float>& fm) {
+  fm.resize(grid.count());
+  const int32_t n = grid.n();
+  if (border < 1 || tile.width() < n + 2 * border || tile.height() < n / 2 + 2 * border) {
+    for (int32_t y = 0; y <= n; ++y) {
+      for (int32_t x = y % 2; x <= 2 * n; x += 2) {
+        fm[grid.id({x, y})] = TerrainModel::bilinear(tile, border, x / 2.0, y / 2.0);
+      }
+    }
+    return;
+  }
+  // TerrainModel::bilinear's arithmetic where it needs no clamping (a border
+  // of at least one sample): a sample centre (x, y odd) is the sample, a
+  // corner (x, y even) its four samples' weights of one half.
+  const int w = tile.width();
+  const float* v = tile.f32().data();
+  for (int32_t y = 0; y <= n; ++y) {
+    float* out = &fm[grid.id({0, y})];
+    if (y % 2) {
+      const float* row = v + static_cast<size_t>(y / 2 + border) * w + border;
+      for (int32_t x = 1; x <= 2 * n; x += 2) out[x] = row[x / 2];
+      continue;
+    }
+    const float* top = v + static_cast<size_t>(y / 2 + border - 1) * w + border - 1;
+    const float* bottom = top + w;
+    for (int32_t x = 0; x <= 2 * n; x += 2) {
+      const int32_t i = x / 2;
+      const float t = top[i] + (top[i + 1] - top[i]) * 0.5f;
+      const float b = bottom[i] + (bottom[i + 1] - bottom[i]) * 0.5f;
+      out[x] = t + (b - t) * 0.5f;
+    }
+  }
+}
+
 }  // namespace
 
 DiamondErrors measure_diamonds(const MarkGrid& grid, const tiles::Raster& tile, int border) {
-  const uint32_t count = grid.count();
-  // The full mesh's heights at its vertices: points with x + y even (sample
-  // centres and corners), the bilinear interpolation of the vertex shader.
-  std::vector<float> fm(count, 0.0f);
-  for (int32_t y = 0; y <= grid.n(); ++y) {
-    for (int32_t x = y % 2; x <= 2 * grid.n(); x += 2) {
-      fm[grid.id({x, y})] = TerrainModel::bilinear(tile, border, x / 2.0, y / 2.0);
-    }
-  }
+  // Reused per thread: the loaders measure tile after tile, and a fresh 2 MB
+  // buffer each time costs its page faults again.
+  thread_local std::vector<float> fm;
+  full_mesh_heights(grid, tile, border, fm);
   DiamondErrors out;
-  out.at.assign(grid.slots(), DiamondError{});
+  out.at.resize(grid.slots());  // every slot written below
+  // The roots (the halves' diagonals), always split: never read, but defined.
+  out.at[grid.slot({grid.n() / 2, grid.n() / 2})] = DiamondError{};
+  out.at[grid.slot({3 * grid.n() / 2, grid.n() / 2})] = DiamondError{};
   // The finest diamonds (class 0, a sample cell around its centre): the
   // cell's corners are the triangles' vertices, so the error is the centre's
   // distance to the diagonal's midpoint; the heights are the five points'.
-  grid.for_each_in_class(0, [&](GridPoint centre) {
-    const Diamond d = grid.diamond(centre);
-    const uint32_t id = grid.id(centre), slot = grid.slot(centre);
-    const double mid = 0.5 * (double{fm[grid.id(d.ends[0])]} + double{fm[grid.id(d.ends[1])]});
-    out.at[slot].error = round_up(std::abs(mid - fm[id]));
-    float lo = fm[id], hi = fm[id];
-    for (const GridPoint& p : {d.ends[0], d.ends[1], d.apexes[0], d.apexes[1]}) {
-      lo = std::min(lo, fm[grid.id(p)]);
-      hi = std::max(hi, fm[grid.id(p)]);
+  // Row by row (MarkGrid::diamond's and slot()'s arithmetic for h = 1: the
+  // centres are the odd points, their slots consecutive).
+  const int32_t n = grid.n(), columns = grid.columns();
+  DiamondError* slot = out.at.data() + grid.slot({1, 1});
+  for (int32_t y = 1; y < n; y += 2) {
+    for (int32_t x = 1; x < 2 * n; x += 2, ++slot) {
+      const float* centre = &fm[grid.id({x, y})];
+      const float nw = centre[-columns - 1], ne = centre[-columns + 1];
+      const float sw = centre[columns - 1], se = centre[columns + 1];
+      // The hypotenuse: north-west to south-east where (x - 1 + y - 1) / 2 is even.
+      const bool main_diagonal = ((x + y - 2) / 2) % 2 == 0;
+      const double mid =
+          main_diagonal ? 0.5 * (double{nw} + double{se}) : 0.5 * (double{ne} + double{sw});
+      slot->error = round_up(std::abs(mid - *centre));
+      const float lo = std::min({*centre, nw, ne, sw, se}),
+                  hi = std::max({*centre, nw, ne, sw, se});
+      slot->lo = static_cast<int16_t>(std::clamp(std::floor(lo), -32768.0f, 32767.0f));
+      slot->hi = static_cast<int16_t>(std::clamp(std::ceil(hi), -32768.0f, 32767.0f));
     }
-    out.at[slot].lo = static_cast<int16_t>(std::clamp(std::floor(lo), -32768.0f, 32767.0f));
-    out.at[slot].hi = static_cast<int16_t>(std::clamp(std::ceil(hi), -32768.0f, 32767.0f));
-  });
+  }
   for (int c = 1; c < grid.classes(); ++c) {
     grid.for_each_in_class(c, [&](GridPoint centre) {
       const Diamond d = grid.diamond(centre);

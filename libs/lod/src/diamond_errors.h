@@ -19,6 +19,7 @@
 #include <list>
 #include <memory>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include "edge_marks.h"
@@ -27,14 +28,33 @@
 
 namespace relief::lod {
 
+// No member initializers: DiamondErrors::at is allocated uninitialized.
 struct DiamondError {
-  float error = 0;         // metres
-  int16_t lo = 0, hi = 0;  // metres
+  float error;     // metres
+  int16_t lo, hi;  // metres
+};
+
+// Allocates without value-initializing: measure_diamonds writes every slot,
+// and a 2 MB memset of fresh pages was a tenth of its time.
+template <class T>
+struct UninitializedAllocator : std::allocator<T> {
+  template <class U>
+  struct rebind {
+    using other = UninitializedAllocator<U>;
+  };
+  template <class U, class... Args>
+  void construct(U* p, Args&&... args) {
+    if constexpr (sizeof...(Args) == 0) {
+      ::new (static_cast<void*>(p)) U;
+    } else {
+      ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+    }
+  }
 };
 
 struct DiamondErrors {
   // By MarkGrid::slot; together, as refinement reads them: one cache line.
-  std::vector<DiamondError> at;
+  std::vector<DiamondError, UninitializedAllocator<DiamondError>> at;
   uint64_t bytes() const { return at.size() * sizeof(DiamondError); }
 };
 
