@@ -251,6 +251,38 @@ TEST_F(TileLoaderTest, BudgetHoldsAndPinnedTilesStay) {
   EXPECT_GE(l.stats().pinned_bytes, 2 * tile_bytes);
 }
 
+// TileProvider::forget (a cache that dropped what it made of a tile): an
+// unpinned resident tile is evicted and loads again when asked for; a pinned
+// one, a permanent level-0 one and one that is not resident stay as they are.
+TEST_F(TileLoaderTest, ForgottenTilesAreEvictedUnlessPinnedAndLoadAgain) {
+  open(0ms);
+  stream::TileLoader& l = loader();
+  const auto keys = finest();
+  ASSERT_GE(keys.size(), 3u);
+  frame({{keys[0], 1}, {keys[1], 1}});
+  wait_idle();
+  const lod::TilePtr pin = *l.get(keys[1]);
+  ASSERT_TRUE(pin);
+  const uint64_t resident = l.stats().resident_bytes;
+  const uint64_t bytes0 = (*l.get(keys[0]))->byte_size();  // not held
+  l.forget(keys[0]);
+  l.forget(keys[1]);    // pinned
+  l.forget({0, 0, 0});  // level 0: kept
+  l.forget(keys[2]);    // never loaded
+  l.begin_frame();      // delivers the events
+  EXPECT_EQ(l.state(keys[0]), TileState::Absent);
+  EXPECT_EQ(l.state(keys[1]), TileState::Resident);
+  EXPECT_EQ(l.state({0, 0, 0}), TileState::Resident);
+  EXPECT_EQ(l.state(keys[2]), TileState::Absent);
+  EXPECT_EQ(recorder_.keys(TileEventKind::Evicted), std::vector<TileKey>{keys[0]});
+  EXPECT_EQ(l.stats().resident_bytes, resident - bytes0);
+  EXPECT_FALSE(*l.get(keys[0]));
+  frame({{keys[0], 1}});
+  wait_idle();
+  EXPECT_EQ(l.state(keys[0]), TileState::Resident);
+  EXPECT_EQ(recorder_.keys(TileEventKind::Loaded).size(), 3u);
+}
+
 // A source whose tile files fail until `healthy` is set.
 class FlakySource final : public tiles::StoreSource {
  public:

@@ -151,6 +151,31 @@ TEST_F(SceneTest, InteractiveFramesRefineWithDiamondErrorsPreparedOffTheRenderTh
             0u);
 }
 
+// Diamond errors cost about four times their tile's decoded heights, so the
+// errors' budget fills long before the loader's: the tiles whose errors were
+// evicted are forgotten by the loader, and a view that returns to them loads
+// them again and has the loader's threads prepare them, instead of the
+// render thread measuring tiles still resident (up to 100 ms a frame for
+// four tiles over the Himalaya).
+TEST_F(SceneTest, TilesWhoseDiamondErrorsWereEvictedLoadAgainInsteadOfBeingMeasured) {
+  SceneOptions o;
+  o.interactive = true;
+  o.selection.mode = lod::LodMode::edge_marks;
+  o.loader.memory_budget = uint64_t{32} << 20;
+  auto created = Scene::create(testing::pyrenees_store(), nullptr, o, clock_);
+  ASSERT_TRUE(created) << created.error().message;
+  Scene& live = **created;
+  const lod::Camera elsewhere = lod::look_at(1.3, 41.4, 800, 20000, 200, -40, 60, 160, 120);
+  uint64_t measured = 0;
+  for (const lod::Camera& camera : {kOblique, elsewhere, kOblique}) {
+    const Converged c = draw_until_complete(live, camera);
+    ASSERT_TRUE(c.last && c.last->complete && c.last->refine);
+    measured += c.measured;
+  }
+  EXPECT_EQ(measured, 0u);
+  EXPECT_GT(live.elevation_loader()->stats().evicted, 0u);  // forgotten with their errors
+}
+
 // The loader's threads of an edge-mark scene measure the diamond errors, not
 // the quads' exact errors, which only the quad mode's selection asks for: a
 // frame that asks measures them itself; a quad-mode scene finds them prepared.

@@ -90,10 +90,12 @@ struct RefineCache::Impl {
   std::mutex mutex;  // the render thread and the loader's threads
   uint64_t budget = 0, bytes = 0;
   std::list<geo::TileKey> lru;  // most recent first
+  uint64_t frame = 1;           // counts end_frame()
   struct Entry {
     std::shared_ptr<const DiamondErrors> errors;
     std::list<geo::TileKey>::iterator at;
     bool prepared = false;  // off the render thread, not used by a frame yet
+    uint64_t used = 0;      // the frame that last used it, or in which it was made
   };
   std::unordered_map<geo::TileKey, Entry, geo::TileKeyHash> entries;
   // The side heights of the last frame's quads (Refiner::prepare_edges: a
@@ -121,10 +123,43 @@ struct RefineCache::Impl {
     edges[key] = {in, std::move(e)};
   }
   // What the next frame may reuse: this frame's.
-  void end_frame() {
-    std::lock_guard lock(mutex);
-    last_edges.swap(edges);
-    edges.clear();
+  // The errors of every tile the frame held count as used, not only the
+  // refined quads' own: a parent tile a frame draws coarse sides with, or
+  // one selection checked, would otherwise be forgotten and loaded again
+  // frame after frame.
+  void end_frame(const TerrainModel& terrain) {
+    std::vector<geo::TileKey> evicted;
+    {
+      std::lock_guard lock(mutex);
+      last_edges.swap(edges);
+      edges.clear();
+      terrain.for_each_held([&](const geo::TileKey& key) {
+        if (auto it = entries.find(key); it != entries.end()) it->second.used = frame;
+      });
+      ++frame;
+      evict_over_budget(evicted);
+    }
+    for (const geo::TileKey& k : evicted) terrain.provider().forget(k);
+  }
+
+  // Evicts least recently used errors over the budget, except level 0's (kept,
+  // as the loader keeps its tiles) and those the last two frames used or
+  // that were made since (mutex held). Evicting those made the render thread
+  // measure them again (the loaders' tiles pushing out the view's); the
+  // budget may be exceeded by them (a view's tiles, a few hundred at most).
+  // The tiles whose errors were evicted are forgotten by the provider
+  // (TileProvider::forget): a view that wants one again loads it again, and
+  // the loader's threads prepare it, instead of the render thread measuring it.
+  void evict_over_budget(std::vector<geo::TileKey>& evicted) {
+    for (auto it = lru.end(); bytes > budget && it != lru.begin();) {
+      --it;
+      auto old = entries.find(*it);
+      if (old->second.used + 1 >= frame || it->level == 0) continue;
+      bytes -= old->second.errors->bytes();
+      evicted.push_back(*it);
+      entries.erase(old);
+      it = lru.erase(it);
+    }
   }
 
   bool contains(const geo::TileKey& key) {
@@ -132,21 +167,20 @@ struct RefineCache::Impl {
     return entries.contains(key);
   }
 
+  // Adds the errors of `key`. Nothing is evicted here but at the end of a
+  // frame, on the render thread, once the tiles the frame held are marked
+  // used: a loader's thread evicting in the middle of a frame could take the
+  // errors of a tile that frame is about to refine.
   void put(const geo::TileKey& key, std::shared_ptr<const DiamondErrors> errors, bool prepared) {
     std::lock_guard lock(mutex);
     if (auto it = entries.find(key); it != entries.end()) {  // measured twice: the same errors
       lru.splice(lru.begin(), lru, it->second.at);
+      it->second.used = frame;
       return;
     }
     bytes += errors->bytes();
     lru.push_front(key);
-    entries[key] = {std::move(errors), lru.begin(), prepared};
-    while (bytes > budget && lru.size() > 1) {  // users hold what this frame needs
-      auto old = entries.find(lru.back());
-      bytes -= old->second.errors->bytes();
-      entries.erase(old);
-      lru.pop_back();
-    }
+    entries[key] = {std::move(errors), lru.begin(), prepared, frame};
   }
 
   // The errors of the diamonds of data tile `key`, counted in `stats` when
@@ -159,6 +193,7 @@ struct RefineCache::Impl {
         lru.splice(lru.begin(), lru, it->second.at);
         stats.tiles_prepared += it->second.prepared;
         it->second.prepared = false;
+        it->second.used = frame;
         return it->second.errors;
       }
     }
@@ -1330,7 +1365,7 @@ Result<RefinedMesh> refine(const View& view, TerrainModel& terrain, const Select
     last_indices = mesh.indices.size();
   }
   r.save_history(mesh);
-  cache.impl().end_frame();
+  cache.impl().end_frame(terrain);
   if (o.history) judge_reuse(*history, mesh.stats);
   mesh.stats.seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -32,6 +32,7 @@ struct Entry {
   std::list<TileKey>::iterator lru;  // Resident only
   bool permanent = false;            // level 0
   bool prefetch = false;             // loaded for a predicted view, not drawn yet
+  bool forgotten = false;            // TileProvider::forget while pinned
   Clock::TimePoint failed_at;
   uint32_t failures = 0;  // in a row, reset by a load
 };
@@ -102,6 +103,8 @@ struct TileLoader::Impl {
   std::list<TileKey> lru;      // resident, most recent first
   std::vector<Request> queue;  // ascending priority: workers take the back
   std::vector<TileEvent> events;
+  // Forgotten while pinned: evicted in a later begin_frame(), once unpinned.
+  std::vector<TileKey> forgotten;
   LoaderStats counters;
   uint64_t resident_bytes = 0;
   uint32_t in_flight = 0, prefetch_in_flight = 0;
@@ -133,12 +136,41 @@ struct TileLoader::Impl {
       Entry& e = entries.at(*it);
       if (pinned(e) || *it == keep) continue;
       const TileKey key = *it;
-      it = lru.erase(it);
-      resident_bytes -= e.bytes;
-      ++counters.evicted;
-      move(key, e, TileState::Absent, {TileEventKind::Evicted, key, e.bytes, e.prefetch, {}});
-      erase(key);
+      it = evict(key, e);
     }
+  }
+
+  // TileProvider::forget: evicts a resident tile now, or once no caller
+  // holds it (a frame pins the tiles it looked at until the next begin);
+  // false when it is still pinned.
+  bool forget(const TileKey& key) {
+    auto it = entries.find(key);
+    if (it == entries.end() || it->second.state != TileState::Resident || it->second.permanent) {
+      return true;
+    }
+    if (pinned(it->second)) {
+      it->second.forgotten = true;
+      return false;
+    }
+    evict(key, it->second);
+    return true;
+  }
+  // The tiles forgotten while pinned (not those loaded again since).
+  void forget_unpinned() {
+    std::erase_if(forgotten, [&](const TileKey& key) {
+      auto it = entries.find(key);
+      return it == entries.end() || !it->second.forgotten || forget(key);
+    });
+  }
+
+  // Drops resident, unpinned entry `e`: the next position in the LRU list.
+  std::list<TileKey>::iterator evict(const TileKey& key, Entry& e) {
+    auto next = lru.erase(e.lru);
+    resident_bytes -= e.bytes;
+    ++counters.evicted;
+    move(key, e, TileState::Absent, {TileEventKind::Evicted, key, e.bytes, e.prefetch, {}});
+    erase(key);
+    return next;
   }
 
   void make_resident(const TileKey& key, Entry& e, lod::TilePtr tile) {
@@ -216,13 +248,7 @@ struct TileLoader::Impl {
       make_resident(r.key, done, std::move(*tile));
       evict_to_budget(r.key);
       if (resident_bytes > options.memory_budget) {
-        // Everything else is pinned: this one does not fit.
-        lru.erase(done.lru);
-        resident_bytes -= done.bytes;
-        ++counters.evicted;
-        move(r.key, done, TileState::Absent,
-             {TileEventKind::Evicted, r.key, done.bytes, r.prefetch, {}});
-        erase(r.key);
+        evict(r.key, done);  // everything else is pinned: this one does not fit
       }
       settled(lock);
     }
@@ -304,6 +330,7 @@ void TileLoader::begin_frame() {
   std::vector<TileEvent> events;
   {
     std::lock_guard lock(impl_->mutex);
+    impl_->forget_unpinned();
     events.swap(impl_->events);
   }
   for (const TileEvent& e : events) {
@@ -341,6 +368,11 @@ void TileLoader::end_frame() {
     });
   }
   m.wake.notify_all();
+}
+
+void TileLoader::forget(const geo::TileKey& key) {
+  std::lock_guard lock(impl_->mutex);
+  if (!impl_->forget(key)) impl_->forgotten.push_back(key);
 }
 
 void TileLoader::set_prepare(Prepare prepare) {

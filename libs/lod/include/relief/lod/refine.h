@@ -33,10 +33,15 @@ namespace relief::lod {
 
 enum class RefineVariant : uint8_t { kTopDown, kBottomUp };
 
-// Per-diamond errors of data tiles (about 4 MB per tile of 512 x 256), kept
-// between frames within a byte budget, least recently used out. For one store.
-// refine() measures the tiles it misses on its own (the render) thread; with
-// prepare_on_load(), the loader's threads fill it too (it is locked).
+// Per-diamond errors of data tiles (about 2 MB per tile of 512 x 256), kept
+// between frames within a byte budget: at the end of each frame the least
+// recently used go, but never level 0's (kept, as a loader keeps its tiles)
+// or those of tiles the last two frames held (so the budget may be exceeded
+// by a view's tiles). For one store. refine() measures the tiles it misses
+// on its own (the render) thread; with prepare_on_load(), the loader's
+// threads fill it too (it is locked), and the provider forgets the tiles
+// whose errors were evicted (TileProvider::forget), so that they load and
+// are prepared again instead of being measured by a frame.
 class RefineCache {
  public:
   explicit RefineCache(uint64_t budget_bytes = uint64_t{512} << 20);
@@ -50,7 +55,8 @@ class RefineCache {
   // non-blocking provider decodes are measured on the loader's threads before
   // the tile becomes resident, and those of the tiles already resident (level
   // 0, loaded at creation) now, so refine() never measures a tile on the
-  // render thread unless the budget dropped it. Byte for byte the errors
+  // render thread unless the budget dropped it while the tile was held
+  // (otherwise the tile is forgotten with its errors). Byte for byte the errors
   // refine() would measure. Nothing for a blocking model (complete frames
   // measure inline). The cache and the model may go in either order.
   void prepare_on_load(TerrainModel& terrain);

@@ -94,11 +94,18 @@ class TerrainModel {
   bool available(const geo::TileKey& key);
   // Ask for a tile that was not available, with its view priority.
   void request(const geo::TileKey& key, double priority) { provider_->request(key, priority); }
+  // Where tiles come from (for TileProvider::forget, from any thread).
+  TileProvider& provider() const { return *provider_; }
 
   // Decoded bordered tile with nodata as 0, or nullptr when the store has
   // none. Non-blocking providers: only for tiles found available() this frame.
   using TilePtr = lod::TilePtr;
   Result<TilePtr> tile(const geo::TileKey& key);
+  // The tiles this frame found available (and holds until the next begin).
+  template <class F>
+  void for_each_held(F f) const {
+    for (const auto& entry : pinned_) f(entry.first);
+  }
 
   // Everything selection asks about a quad, cached per quad: the heights of
   // the terrain in it (plus one sample around), an ECEF box around its

@@ -41,6 +41,11 @@ class TileProvider {
   // call it). An empty function removes it.
   using Prepare = std::function<void(const geo::TileKey&, const tiles::Raster&)>;
   virtual void set_prepare(Prepare /*prepare*/) {}
+  // Whoever prepared this tile dropped what it made of it (a cache budget):
+  // evict the tile unless a caller holds it, so that when a view wants it
+  // again it loads, and is prepared, again, off the caller's thread.
+  // Thread-safe; non-blocking providers (others ignore it).
+  virtual void forget(const geo::TileKey& /*key*/) {}
 };
 
 // Reads each tile from the store when asked, keeping decoded tiles within a

@@ -93,6 +93,9 @@ class TileLoader final : public lod::TileProvider {
   void begin_frame() override;
   void end_frame() override;
   void set_prepare(Prepare prepare) override;
+  // Evicts the tile now, or in the first begin_frame() after its last pin
+  // went (an Evicted event); nothing for level 0 or a tile not resident.
+  void forget(const geo::TileKey& key) override;
 
   // While set, requests are prefetch: ranked after the current view's.
   void set_prefetch(bool on) { prefetching_ = on; }
