@@ -802,6 +802,12 @@ class Refiner {
       if (vertical_error_pixels(view_, info->box, q.bounds, q.level_error) > o_.pixel_error) {
         ++stats_.too_coarse;
         stats_.split_wanted.push_back(s.key);
+        // A frame whose selection waits for data (never complete) keeps
+        // such quads while their children's tiles load, often many at once
+        // after a turn: their full meshes (up to 2 x 512 x 256 triangles
+        // each) bought no bound and took 2 M triangles and a second a frame
+        // on llvmpipe. They are refined against their own data instead.
+        if (!terrain_.blocking() && selection_.stats.waiting > 0) q.level_error = 0;
       }
     }
     for (int side = 0; side < 4; ++side) {
