@@ -14,7 +14,10 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <fstream>
+#include <functional>
+#include <memory>
 #include <mutex>
 #include <set>
 #include <thread>
@@ -534,6 +537,58 @@ TEST_F(TileLoaderTest, WorkersRunAtALowerPriorityThanTheThreadThatCreatesThem) {
   nice = nice_of_threads("relief-loader");
   ASSERT_EQ(nice.size(), 2u);
   for (int n : nice) EXPECT_EQ(n, own);
+}
+
+// LoaderOptions::max_preparing: however many workers have read their tiles,
+// no more than that many run the Prepare step at once (the others wait for a
+// slot; the render thread keeps a core). Each Prepare here holds its slot
+// until the test lets it go.
+TEST_F(TileLoaderTest, NoMoreThanMaxPreparingWorkersPrepareAtOnce) {
+  open(0ms);
+  stream::TileLoader& l = loader({.max_in_flight = 4, .max_preparing = 2});
+  std::mutex mutex;
+  std::condition_variable changed;
+  int running = 0, most = 0, entered = 0;
+  bool release = false;
+  l.set_prepare([&](const TileKey&, const tiles::Raster&) {
+    std::unique_lock lock(mutex);
+    ++entered;
+    most = std::max(most, ++running);
+    changed.notify_all();
+    changed.wait(lock, [&] { return release; });
+    --running;
+  });
+  const auto open_gate = [&] {
+    {
+      std::lock_guard lock(mutex);
+      release = true;
+    }
+    changed.notify_all();
+  };
+  // A failed assertion returns early: the gate opens so the workers can end.
+  const std::unique_ptr<void, std::function<void(void*)>> opened_at_exit(
+      &release, [&](void*) { open_gate(); });
+  const auto keys = finest();
+  ASSERT_GE(keys.size(), 4u);
+  frame({{keys[0], 4}, {keys[1], 3}, {keys[2], 2}, {keys[3], 1}});
+  {
+    std::unique_lock lock(mutex);
+    ASSERT_TRUE(changed.wait_for(lock, 60s, [&] { return entered == 2; }));
+  }
+  // Every tile has been read; the two workers left are at the gate. Give
+  // them time to pass it, were it open.
+  for (int i = 0; i < 60000 && source_->answered() < 4; ++i) std::this_thread::sleep_for(1ms);
+  ASSERT_EQ(source_->answered(), 4u);
+  std::this_thread::sleep_for(100ms);
+  {
+    std::lock_guard lock(mutex);
+    EXPECT_EQ(entered, 2);
+  }
+  open_gate();
+  wait_idle();
+  EXPECT_EQ(entered, 4);
+  EXPECT_EQ(most, 2);
+  EXPECT_EQ(recorder_.keys(TileEventKind::Loaded).size(), 4u);
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 #include <condition_variable>
 #include <list>
 #include <mutex>
+#include <semaphore>
 #include <thread>
 #include <unordered_map>
 
@@ -113,8 +114,23 @@ struct TileLoader::Impl {
   std::vector<std::function<void(const TileEvent&)>> listeners;
   std::shared_ptr<const lod::TileProvider::Prepare> prepare;  // run by workers after decoding
   std::vector<std::thread> workers;
+  std::counting_semaphore<> preparing;  // LoaderOptions::max_preparing
 
-  Impl(const tiles::Store& s, const LoaderOptions& o) : store(s), options(o) {}
+  Impl(const tiles::Store& s, const LoaderOptions& o)
+      : store(s), options(o), preparing(preparing_slots(o)) {}
+
+  static std::ptrdiff_t preparing_slots(const LoaderOptions& o) {
+    if (o.max_preparing > 0) return o.max_preparing;
+    return std::max(1, static_cast<int>(std::thread::hardware_concurrency()) - 1);
+  }
+
+  // Runs the Prepare step within LoaderOptions::max_preparing.
+  void prepare_tile(const lod::TileProvider::Prepare& prepare_step, const TileKey& key,
+                    const tiles::Raster& tile) {
+    preparing.acquire();
+    prepare_step(key, tile);
+    preparing.release();
+  }
 
   // Every state change goes through here (mutex held).
   void move(const TileKey& key, Entry& e, TileState to, TileEvent event) {
@@ -220,10 +236,10 @@ struct TileLoader::Impl {
       move(r.key, e, TileState::Loading, {TileEventKind::Started, r.key, 0, r.prefetch, {}});
       ++in_flight;
       prefetch_in_flight += r.prefetch;
-      const auto prepare_tile = prepare;
+      const auto prepare_step = prepare;
       lock.unlock();
       Result<lod::TilePtr> tile = lod::decode_tile(store, r.key);
-      if (tile && prepare_tile && *prepare_tile) (*prepare_tile)(r.key, **tile);
+      if (tile && prepare_step && *prepare_step) this->prepare_tile(*prepare_step, r.key, **tile);
       const tiles::IndexEntry* ie = store.index(r.key.level).find(r.key);
       lock.lock();
       --in_flight;
