@@ -73,6 +73,8 @@ options:
   --gpu-budget SIZE  GPU texture cache (L3) budget (default 1GiB)
   --cache DIR        for a store given as http:// URL(s): keep fetched files under DIR
   --cache-size SIZE  budget of that disk cache (L1, default 1GiB)
+  --loader-nice N    run the tile loaders N nice levels below the render thread
+                     (0-19, default 0; docs/streaming.md "In flight")
   --simulate-latency MS    add MS milliseconds to every store request
   --simulate-bandwidth MBIT  share MBIT Mbit/s among all store requests
 path options:

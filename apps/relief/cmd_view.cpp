@@ -70,7 +70,8 @@ options:
                      next (by default the next frame is refined while the GL
                      draws this one, and swaps it: docs/viewer.md, "Overlap")
   --no-vsync         do not wait for the display's refresh
-  --fov, --exaggeration, --lod, --sky, --gpu-budget, --cache, --cache-size
+  --fov, --exaggeration, --lod, --sky, --gpu-budget, --cache, --cache-size,
+  --loader-nice
                      as relief render
 %TEXTURE%)";
 

@@ -88,7 +88,7 @@ std::vector<OptionSpec> with_scene_options(std::vector<OptionSpec> own) {
   for (const char* name :
        {"--imagery", "--detect-level", "--detect-sensitivity", "--elevation", "--fuse", "--weights",
         "--camera", "--look-at", "--size", "--fov", "--pixel-error", "--exaggeration", "--lod",
-        "--sky", "--gpu-budget", "--cache", "--cache-size"}) {
+        "--sky", "--gpu-budget", "--cache", "--cache-size", "--loader-nice"}) {
     own.emplace_back(name);
   }
   own.emplace_back("--detect", "", false);
@@ -130,6 +130,7 @@ Result<RenderSetup> parse_render_setup(const Args& args, TextureLayers textures,
     }
   }
   if (auto level = RELIEF_TRY(args.get_int("--mesh-level", 0, 8))) s.mesh_level = *level;
+  if (auto nice = RELIEF_TRY(args.get_int("--loader-nice", 0, 19))) s.loader_nice = *nice;
   if (auto lod = args.get("--lod")) {
     if (*lod == "quads") {
       s.lod_mode = lod::LodMode::quads;
@@ -209,6 +210,7 @@ view::SceneOptions scene_options(const RenderSetup& setup) {
   so.selection.mode = setup.lod_mode;
   so.refine_variant = setup.refine_variant;
   so.gpu_budget = setup.gpu_budget;
+  so.loader.worker_nice = setup.loader_nice;
   so.render.exaggeration = static_cast<float>(setup.exaggeration);
   so.render.sky = setup.sky;
   return so;

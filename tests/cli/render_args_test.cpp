@@ -53,6 +53,8 @@ TEST_F(RenderArgs, ImpossibleCameraValuesNameTheArgument) {
       {{"--camera", "1.5,42.5,5000,0,-30,0", "--fov", "nan"}, "--fov"},
       {{"--camera", "1.5,42.5,5000,0,-30,0", "--size", "0x0"}, "--size"},
       {{"--camera", "1.5,42.5,5000,0,-30,0", "--size", "100000x100000"}, "--size"},
+      {{"--camera", "1.5,42.5,5000,0,-30,0", "--loader-nice", "20"}, "--loader-nice"},
+      {{"--camera", "1.5,42.5,5000,0,-30,0", "--loader-nice", "-1"}, "--loader-nice"},
   };
   for (const auto& c : cases) {
     std::vector<std::string> args = {"render", store_, "-o", out};
