@@ -1,8 +1,10 @@
 // `relief view`: argument parsing and output around the viewer (libs/window).
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <thread>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -252,6 +254,8 @@ int view_session(const Args& args, RenderSetup& setup) {
   view::SceneOptions so = scene_options(setup);
   so.interactive = true;
   so.loader.memory_budget = uint64_t{512} << 20;
+  // The render thread keeps a core while tiles are prepared (docs/streaming.md).
+  so.loader.max_preparing = std::max(1, static_cast<int>(std::thread::hardware_concurrency()) - 1);
   so.lookahead_frames = 15;  // half a second ahead at 30 fps
 
   window::WindowOptions wo;

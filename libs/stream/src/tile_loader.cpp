@@ -120,8 +120,7 @@ struct TileLoader::Impl {
       : store(s), options(o), preparing(preparing_slots(o)) {}
 
   static std::ptrdiff_t preparing_slots(const LoaderOptions& o) {
-    if (o.max_preparing > 0) return o.max_preparing;
-    return std::max(1, static_cast<int>(std::thread::hardware_concurrency()) - 1);
+    return o.max_preparing > 0 ? o.max_preparing : std::max(o.max_in_flight, 1);
   }
 
   // Runs the Prepare step within LoaderOptions::max_preparing.

@@ -41,10 +41,11 @@ namespace relief::stream {
 struct LoaderOptions {
   int max_in_flight = 8;  // worker threads
   // How many workers may run the Prepare step (the diamond errors: ~10 ms of
-  // CPU per elevation tile) at once; 0: one less than the machine's cores,
-  // at least one. Reads (I/O) are not limited by it: on 2 cores, 8 workers
-  // preparing at once took the core the render thread needs, and a frame of
-  // 25 ms CPU took 100 ms in a turn (docs/streaming.md).
+  // CPU per elevation tile) at once; 0: all of them. Reads (I/O) are not
+  // limited by it. `relief view` sets one less than the cores: on 2 cores,
+  // 8 workers preparing at once took the core the render thread needs, and
+  // a frame of 25 ms CPU took 100 ms in a turn (docs/streaming.md). Off by
+  // default: work that waits for complete frames wants the throughput.
   int max_preparing = 0;
   uint64_t memory_budget = uint64_t{256} << 20;  // resident decoded bytes
   // A failed tile may load again after this pause, doubled after each further
