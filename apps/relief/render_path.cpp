@@ -208,9 +208,8 @@ int render_path(const Args& args, RenderSetup& setup, const Clock& clock) {
   // with --no-prefetch.
   const bool wait_complete = options->movie && options->prefetch && fetched_over_a_link(args);
   so.interactive = options->interactive || wait_complete;
-  const int loader_nice = so.loader.worker_nice;
   so.loader = options->loader;
-  so.loader.worker_nice = loader_nice;
+  so.loader.worker_nice = setup.loader_nice;
   so.imagery_budget = options->imagery_budget;
   so.prefetch = options->prefetch;
   so.lookahead_frames = 0.5 * fps;  // prefetch half a second ahead
