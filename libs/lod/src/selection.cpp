@@ -1,6 +1,7 @@
 #include "relief/lod/selection.h"
 
 #include <algorithm>
+#include <cassert>
 #include <chrono>
 #include <deque>
 #include <functional>
@@ -196,6 +197,10 @@ class Selector {
     // Children of a culled quad are culled too (their bounds nest):
     // splitting it for the restriction needs no data.
     if (const Leaf* leaf = leaves_.find(key); leaf && !leaf->visible) return true;
+    // Nor does a visible quad whose children are all culled: nothing of it
+    // is drawn once it splits (the quad's own tile is there for its
+    // children's sides shared with coarser quads).
+    if (RELIEF_TRY(children_culled(key))) return true;
     if (const DataWindow own = terrain_.window(key); own.tile && !terrain_.available(*own.tile)) {
       // A culled quad without its data: that loads first (ancestors first).
       request_first_missing(*own.tile);
@@ -215,7 +220,8 @@ class Selector {
         return false;
       }
       TerrainModel::QuadInfo* info = RELIEF_TRY(terrain_.quad(child));
-      if (outside_frustum(info->box, planes_) || hidden_by_horizon(info->box, info->range))
+      if (outside_frustum(info->box, planes_) || hidden_by_horizon(info->box, info->range) ||
+          !RELIEF_TRY(wants_own_tile(child)))
         continue;
       const double p = priority(info->box);
       terrain_.request(*w.tile, p);
@@ -226,13 +232,57 @@ class Selector {
     return all;
   }
 
+  // Whether every child of `key` is outside the view: it then splits into
+  // quads that draw nothing. Children without a tile of their own, or whose
+  // bounds need their tile, count as visible.
+  Result<bool> children_culled(const TileKey& key) {
+    if (key.level >= deepest()) return false;
+    for (int c = 0; c < 4; ++c) {
+      const TileKey child = key.child(c & 1, c >> 1);
+      if (!terrain_.window(child).tile || terrain_.draws_ancestor(child)) return false;
+      TerrainModel::QuadInfo* info = RELIEF_TRY(terrain_.quad(child));
+      if (!outside_frustum(info->box, planes_) && !hidden_by_horizon(info->box, info->range)) {
+        return false;
+      }
+    }
+    return true;
+  }
+
+  // An interactive frame reaches a visible quad without its data only when
+  // all its children are culled (wants_own_tile): nothing of it is on
+  // screen, so should it stay a leaf (frozen, or coarsened back by the
+  // restriction) it is culled rather than drawn without data.
+  Result<Leaf> drawable(const TileKey& key, Leaf leaf) {
+    if (!leaf.visible || terrain_.blocking()) return leaf;
+    const DataWindow w = terrain_.window(key);
+    if (!w.tile || terrain_.available(*w.tile)) return leaf;
+    assert(children_culled(key).value_or(true));
+    leaf.visible = false;
+    return leaf;
+  }
+
+  // Whether the view will want the tile of a visible quad that the
+  // selection reaches: not when the quad splits into culled children only.
+  Result<bool> wants_own_tile(const TileKey& key) {
+    if (key.level >= deepest()) return true;
+    const Leaf leaf = RELIEF_TRY(assess(key));
+    const bool splits =
+        leaf.visible && (leaf.error_pixels > o_.pixel_error || leaf.split_for_samples);
+    return !splits || !RELIEF_TRY(children_culled(key));
+  }
+
   // Requests the data the view will want below a quad whose own data is not
   // resident yet, each tile ranked below its ancestors (which load first), so
   // a deep view does not wait one round trip per level. Needs no tiles: above
   // the store's finest level, errors come from the index.
   Status want_below(const TileKey& key, double cap) {
-    // The restricted property will split the visible same-level neighbours
-    // of `key` (its children sit beside them): their data is wanted too.
+    if (key.level + 1 > terrain_.data_max_level()) return {};
+    const Leaf leaf = RELIEF_TRY(assess(key));
+    if (!leaf.visible || (leaf.error_pixels <= o_.pixel_error && !leaf.split_for_samples))
+      return {};
+    // `key` will split: the restricted property then splits the parents of
+    // its visible same-level neighbours (its children sit beside them), so
+    // their data is wanted too. A quad that stays a leaf forces nothing.
     for (int dy = -1; dy <= 1; ++dy) {
       for (int dx = -1; dx <= 1; ++dx) {
         const auto n = key.neighbour(dx, dy);
@@ -240,21 +290,19 @@ class Selector {
         const DataWindow w = terrain_.window(*n);
         if (!w.tile || terrain_.available(*w.tile) || terrain_.draws_ancestor(*n)) continue;
         TerrainModel::QuadInfo* info = RELIEF_TRY(terrain_.quad(*n));
-        if (outside_frustum(info->box, planes_) || hidden_by_horizon(info->box, info->range))
+        if (outside_frustum(info->box, planes_) || hidden_by_horizon(info->box, info->range) ||
+            !RELIEF_TRY(wants_own_tile(*n)))
           continue;
         request_with_ancestors(*w.tile, cap * 0.25);
       }
     }
-    if (key.level + 1 > terrain_.data_max_level()) return {};
-    const Leaf leaf = RELIEF_TRY(assess(key));
-    if (!leaf.visible || (leaf.error_pixels <= o_.pixel_error && !leaf.split_for_samples))
-      return {};
     for (int c = 0; c < 4; ++c) {
       const TileKey child = key.child(c & 1, c >> 1);
       const DataWindow w = terrain_.window(child);
       if (!w.tile || terrain_.draws_ancestor(child)) continue;
       TerrainModel::QuadInfo* info = RELIEF_TRY(terrain_.quad(child));
-      if (outside_frustum(info->box, planes_) || hidden_by_horizon(info->box, info->range))
+      if (outside_frustum(info->box, planes_) || hidden_by_horizon(info->box, info->range) ||
+          !RELIEF_TRY(wants_own_tile(child)))
         continue;
       const double p = std::min(priority(info->box), cap * 0.5);
       terrain_.request(*w.tile, p);
@@ -276,7 +324,7 @@ class Selector {
                   (view_ && o_.also_split && o_.also_split(key)));
     if (split) split = splittable(key) && RELIEF_TRY(children_available(key));
     if (!split) {
-      leaves_.set(key, leaf);
+      leaves_.set(key, RELIEF_TRY(drawable(key, leaf)));
       if (added) added->push_back(key);
       return {};
     }
@@ -337,7 +385,8 @@ class Selector {
       }
     });
     for (const TileKey& k : below) leaves_.erase(k);
-    leaves_.set(key, RELIEF_TRY(assess(key)));
+    const Leaf assessed = RELIEF_TRY(assess(key));
+    leaves_.set(key, RELIEF_TRY(drawable(key, assessed)));
     frozen_.insert(key);
     return {};
   }
