@@ -1,7 +1,9 @@
 // `relief view`: argument parsing and output around the viewer (libs/window).
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cstdio>
 #include <filesystem>
 #include <thread>
@@ -12,6 +14,8 @@
 #include "args.h"
 #include "commands.h"
 #include "output_safety.h"
+#include "relief/base/threads.h"
+#include "relief/stream/tile_loader.h"
 #include "relief/view/path_file.h"
 #include "relief/window/viewer.h"
 #include "relief/window/window.h"
@@ -169,7 +173,25 @@ Result<window::ViewerOptions> viewer_options(const Args& args, const RenderSetup
   return o;
 }
 
-nlohmann::json stats_json(const window::ViewerSummary& s, const std::string& renderer) {
+// What the loaders' settings did, as the kernel and the loader saw it: the
+// nice value of every loader worker and of the render thread (this one),
+// and the most workers that prepared tiles at once.
+nlohmann::json loaders_json(view::Scene& scene, const view::SceneOptions& so) {
+  nlohmann::json nice = nlohmann::json::array();
+  for (const ThreadInfo& t : threads_named("relief-loader")) nice.push_back(t.nice);
+  errno = 0;
+  const int own = getpriority(PRIO_PROCESS, static_cast<id_t>(gettid()));
+  nlohmann::json j = {{"worker_nice", nice},
+                      {"render_thread_nice", errno ? 0 : own},
+                      {"max_preparing", so.loader.max_preparing}};
+  if (stream::TileLoader* loader = scene.elevation_loader()) {
+    j["most_preparing"] = loader->stats().most_preparing;
+  }
+  return j;
+}
+
+nlohmann::json stats_json(const window::ViewerSummary& s, const std::string& renderer,
+                          nlohmann::json loaders) {
   nlohmann::json frames = nlohmann::json::array();
   for (const window::ViewerFrame& f : s.frames_list) {
     const lod::Camera& c = f.camera;
@@ -212,7 +234,8 @@ nlohmann::json stats_json(const window::ViewerSummary& s, const std::string& ren
                             {"p99_frame_ms", s.p99_frame_ms},
                             {"complete", s.complete},
                             {"path_finished", s.path_finished},
-                            {"renderer", renderer}};
+                            {"renderer", renderer},
+                            {"loaders", std::move(loaders)}};
   return {{"summary", summary}, {"frames", frames}};
 }
 
@@ -293,7 +316,8 @@ int view_session(const Args& args, RenderSetup& setup) {
     }
   }
   if (auto path = args.get("--stats")) {
-    const std::string text = stats_json(*summary, (*window)->renderer()).dump(1);
+    const std::string text =
+        stats_json(*summary, (*window)->renderer(), loaders_json((*viewer)->scene(), so)).dump(1);
     if (auto st = write_json(*path, text); !st) return report_error(st.error().message);
   }
   std::printf("%zu frames in %.1f s: frame time p50 %.1f ms, p99 %.1f ms; last frame %s\n",

@@ -588,6 +588,7 @@ TEST_F(TileLoaderTest, NoMoreThanMaxPreparingWorkersPrepareAtOnce) {
   wait_idle();
   EXPECT_EQ(entered, 4);
   EXPECT_EQ(most, 2);
+  EXPECT_EQ(l.stats().most_preparing, 2u);  // what relief view's --stats reports
   EXPECT_EQ(recorder_.keys(TileEventKind::Loaded).size(), 4u);
 }
 

@@ -736,6 +736,32 @@ TEST(ViewCommand, PlaysAPathWithoutInputAndWritesTheStatisticsOfEveryFrame) {
   EXPECT_GT(frames.back()["triangles"].get<uint64_t>(), 0u);
 }
 
+// The loaders' settings reach their workers: every loader thread runs
+// --loader-nice levels below the render thread (as the kernel reports it),
+// and no more workers prepare tiles at once than relief view allows (one
+// less than the cores, at least one).
+TEST(ViewCommand, TheLoadersWorkersRunAtTheirNiceAndPrepareWithinTheLimit) {
+  ScratchDir dir("view_loaders");
+  const auto path = dir / "path.json";
+  write_path(path);
+  const int cores = static_cast<int>(std::thread::hardware_concurrency());
+  for (const int nice : {0, 7}) {
+    const auto stats = dir / fmt::format("stats{}.json", nice);
+    auto r = run_relief(
+        {"view", store_path(), "--play", path.string(), "--exit-when-done", "--stats",
+         stats.string(), "--size", "160x120", "--no-vsync", "--loader-nice", std::to_string(nice)},
+        kNoMesaLeakReport);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const json loaders = read_json(stats)["summary"]["loaders"];
+    const int own = loaders["render_thread_nice"].get<int>();
+    ASSERT_FALSE(loaders["worker_nice"].empty()) << "no thread named relief-loader";
+    for (const json& n : loaders["worker_nice"]) EXPECT_EQ(n.get<int>(), std::min(19, own + nice));
+    EXPECT_EQ(loaders["max_preparing"].get<int>(), std::max(1, cores - 1));
+    EXPECT_GE(loaders["most_preparing"].get<int>(), 1) << "tiles were prepared";
+    EXPECT_LE(loaders["most_preparing"].get<int>(), std::max(1, cores - 1));
+  }
+}
+
 TEST(ViewCommand, ARecordedSessionPlaysBackThroughTheSameCameras) {
   ScratchDir dir("view_record");
   const auto path = dir / "path.json", recorded = dir / "recorded.json", stats = dir / "stats.json";

@@ -1,6 +1,7 @@
 #include "relief/stream/tile_loader.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cassert>
 #include <cerrno>
 #include <cmath>
@@ -114,7 +115,8 @@ struct TileLoader::Impl {
   std::vector<std::function<void(const TileEvent&)>> listeners;
   std::shared_ptr<const lod::TileProvider::Prepare> prepare;  // run by workers after decoding
   std::vector<std::thread> workers;
-  std::counting_semaphore<> preparing;  // LoaderOptions::max_preparing
+  std::counting_semaphore<> preparing;                   // LoaderOptions::max_preparing
+  std::atomic<int> preparing_now{0}, preparing_most{0};  // LoaderStats::most_preparing
 
   Impl(const tiles::Store& s, const LoaderOptions& o)
       : store(s), options(o), preparing(preparing_slots(o)) {}
@@ -127,7 +129,12 @@ struct TileLoader::Impl {
   void prepare_tile(const lod::TileProvider::Prepare& prepare_step, const TileKey& key,
                     const tiles::Raster& tile) {
     preparing.acquire();
+    const int now = preparing_now.fetch_add(1) + 1;
+    for (int most = preparing_most.load(); now > most;) {
+      if (preparing_most.compare_exchange_weak(most, now)) break;
+    }
     prepare_step(key, tile);
+    preparing_now.fetch_sub(1);
     preparing.release();
   }
 
@@ -402,6 +409,7 @@ void TileLoader::subscribe(std::function<void(const TileEvent&)> listener) {
 LoaderStats TileLoader::stats() const {
   std::lock_guard lock(impl_->mutex);
   LoaderStats s = impl_->counters;
+  s.most_preparing = static_cast<uint32_t>(impl_->preparing_most.load());
   s.memory_budget = impl_->options.memory_budget;
   s.resident_bytes = impl_->resident_bytes;
   s.queued = static_cast<uint32_t>(impl_->queue.size());
