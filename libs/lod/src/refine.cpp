@@ -275,6 +275,20 @@ struct RefineHistory::Impl {
   bool judged = false;  // the next frame's reuse is judged (it follows a recording frame)
   uint32_t low = 0;     // judged frames in a row under kMinReused
   bool woke = false;    // no frame reused enough since the last dormant spell
+  // The last frame's view: a camera that stops wakes a dormant history at
+  // once (its next frame reuses every decision) instead of after the spell.
+  struct Seen {
+    Vec3 eye, right, up, forward;
+    double pixel_error = 0;
+    bool operator==(const Seen& o) const {
+      const auto eq = [](const Vec3& a, const Vec3& b) {
+        return a.x == b.x && a.y == b.y && a.z == b.z;
+      };
+      return eq(eye, o.eye) && eq(right, o.right) && eq(up, o.up) && eq(forward, o.forward) &&
+             pixel_error == o.pixel_error;
+    }
+  };
+  std::optional<Seen> seen;
 };
 
 RefineHistory::RefineHistory() : impl_(std::make_unique<Impl>()) {}
@@ -1352,7 +1366,18 @@ Result<RefinedMesh> refine(const View& view, TerrainModel& terrain, const Select
   thread_local size_t last_indices = 0;
   RefineOptions o = options;
   RefineHistory::Impl* history = options.history ? &options.history->impl() : nullptr;
-  if (history && history->dormant > 0) {  // decided from scratch, nothing recorded
+  if (history) {
+    const RefineHistory::Impl::Seen seen{view.eye, view.right, view.up, view.forward,
+                                         options.pixel_error};
+    if (history->dormant > 0 && history->seen == seen) {  // stopped: record from this frame
+      history->dormant = 0;
+      history->judged = false;
+      history->low = 0;
+    }
+    history->seen = seen;
+  }
+  const bool asleep = history && history->dormant > 0;
+  if (asleep) {  // decided from scratch, nothing recorded
     --history->dormant;
     o.history = nullptr;
   }
@@ -1373,6 +1398,7 @@ Result<RefinedMesh> refine(const View& view, TerrainModel& terrain, const Select
   r.save_history(mesh);
   cache.impl().end_frame(terrain);
   if (o.history) judge_reuse(*history, mesh.stats);
+  mesh.stats.history_asleep = asleep;
   mesh.stats.seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   mesh.stats.cpu_seconds = thread_cpu_seconds() - cpu_start;

@@ -30,6 +30,8 @@ struct RefineStats {
   // evaluation computed for them.
   uint32_t quads_reused = 0;
   uint64_t marks_reused = 0;
+  // The history was asleep (a fast camera): nothing reused nor recorded.
+  bool history_asleep = false;
   uint64_t unresolved = 0;           // diamonds over the threshold that could not split
   double max_unresolved_pixels = 0;  // their largest projected error bound
   // Quads whose level error (TerrainModel::level_error) alone may project
