@@ -137,6 +137,11 @@ class Selector {
     return leaf;
   }
 
+  // Outside the view: beyond the frustum or behind the horizon.
+  bool culled(const TerrainModel::QuadInfo& info) const {
+    return outside_frustum(info.box, planes_) || hidden_by_horizon(info.box, info.range);
+  }
+
   bool hidden_by_horizon(const Box& b, const HeightRange& range) const {
     // Every corner of the box behind the ellipsoid shrunk below the lowest
     // terrain (boxes of large quads are too loose to judge: never culled).
@@ -220,9 +225,7 @@ class Selector {
         return false;
       }
       TerrainModel::QuadInfo* info = RELIEF_TRY(terrain_.quad(child));
-      if (outside_frustum(info->box, planes_) || hidden_by_horizon(info->box, info->range) ||
-          !RELIEF_TRY(wants_own_tile(child)))
-        continue;
+      if (culled(*info) || !RELIEF_TRY(wants_own_tile(child))) continue;
       const double p = priority(info->box);
       terrain_.request(*w.tile, p);
       ++waiting_;
@@ -241,9 +244,7 @@ class Selector {
       const TileKey child = key.child(c & 1, c >> 1);
       if (!terrain_.window(child).tile || terrain_.draws_ancestor(child)) return false;
       TerrainModel::QuadInfo* info = RELIEF_TRY(terrain_.quad(child));
-      if (!outside_frustum(info->box, planes_) && !hidden_by_horizon(info->box, info->range)) {
-        return false;
-      }
+      if (!culled(*info)) return false;
     }
     return true;
   }
@@ -290,9 +291,7 @@ class Selector {
         const DataWindow w = terrain_.window(*n);
         if (!w.tile || terrain_.available(*w.tile) || terrain_.draws_ancestor(*n)) continue;
         TerrainModel::QuadInfo* info = RELIEF_TRY(terrain_.quad(*n));
-        if (outside_frustum(info->box, planes_) || hidden_by_horizon(info->box, info->range) ||
-            !RELIEF_TRY(wants_own_tile(*n)))
-          continue;
+        if (culled(*info) || !RELIEF_TRY(wants_own_tile(*n))) continue;
         request_with_ancestors(*w.tile, cap * 0.25);
       }
     }
@@ -301,9 +300,7 @@ class Selector {
       const DataWindow w = terrain_.window(child);
       if (!w.tile || terrain_.draws_ancestor(child)) continue;
       TerrainModel::QuadInfo* info = RELIEF_TRY(terrain_.quad(child));
-      if (outside_frustum(info->box, planes_) || hidden_by_horizon(info->box, info->range) ||
-          !RELIEF_TRY(wants_own_tile(child)))
-        continue;
+      if (culled(*info) || !RELIEF_TRY(wants_own_tile(child))) continue;
       const double p = std::min(priority(info->box), cap * 0.5);
       terrain_.request(*w.tile, p);
       RELIEF_CHECK(want_below(child, p));
