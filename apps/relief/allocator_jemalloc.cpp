@@ -28,7 +28,28 @@ std::string allocator_description() {
   mallctl("version", static_cast<void*>(&version), &size, nullptr, 0);
   size = sizeof(const char*);
   mallctl("opt.thp", static_cast<void*>(&thp), &size, nullptr, 0);
-  return fmt::format("jemalloc {} (transparent huge pages: {})", version, thp);
+  ssize_t decay = 0;
+  size = sizeof decay;
+  const bool kept = mallctl("arena.0.dirty_decay_ms", &decay, &size, nullptr, 0) == 0 && decay < 0;
+  return fmt::format("jemalloc {} (transparent huge pages: {}{})", version, thp,
+                     kept ? "; freed memory kept" : "");
+}
+
+void keep_freed_memory() {
+  ssize_t never = -1;
+  for (const char* name : {"arenas.dirty_decay_ms", "arenas.muzzy_decay_ms"}) {  // arenas to come
+    mallctl(name, nullptr, nullptr, &never, sizeof never);
+  }
+  unsigned arenas = 0;
+  size_t size = sizeof arenas;
+  if (mallctl("arenas.narenas", &arenas, &size, nullptr, 0) != 0) return;
+  for (unsigned i = 0; i < arenas;
+       ++i) {  // an arena not made yet refuses: it will follow the above
+    for (const char* kind : {"dirty", "muzzy"}) {
+      const std::string name = fmt::format("arena.{}.{}_decay_ms", i, kind);
+      mallctl(name.c_str(), nullptr, nullptr, &never, sizeof never);
+    }
+  }
 }
 
 }  // namespace relief::cli

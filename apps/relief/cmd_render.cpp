@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "allocator.h"
 #include "args.h"
 #include "commands.h"
 #include "output_safety.h"
@@ -282,7 +283,10 @@ int run_render(const std::vector<std::string>& command_line) {
   }
   auto setup = parse_render_setup(*args, std::move(layers->textures), std::move(layers->elevation));
   if (!setup) return report_error(setup.error().message);
-  if (args->get("--path")) return render_path(*args, *setup);
+  if (args->get("--path")) {
+    keep_freed_memory();  // frame after frame
+    return render_path(*args, *setup);
+  }
   return render_still(*args, *setup);
 }
 

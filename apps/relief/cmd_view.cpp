@@ -11,6 +11,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "allocator.h"
 #include "args.h"
 #include "commands.h"
 #include "output_safety.h"
@@ -235,6 +236,7 @@ nlohmann::json stats_json(const window::ViewerSummary& s, const std::string& ren
                             {"complete", s.complete},
                             {"path_finished", s.path_finished},
                             {"renderer", renderer},
+                            {"allocator", allocator_description()},
                             {"loaders", std::move(loaders)}};
   return {{"summary", summary}, {"frames", frames}};
 }
@@ -363,6 +365,7 @@ int run_view(const std::vector<std::string>& command_line) {
   }
   auto setup = parse_render_setup(*args, std::move(layers->textures), std::move(layers->elevation));
   if (!setup) return report_error(setup.error().message);
+  keep_freed_memory();
   return view_session(*args, *setup);
 }
 

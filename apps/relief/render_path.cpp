@@ -12,6 +12,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "allocator.h"
 #include "commands.h"
 #include "relief/base/file_io.h"
 #include "relief/base/memory_use.h"
@@ -345,7 +346,8 @@ int render_path(const Args& args, RenderSetup& setup, const Clock& clock) {
                   {"cancelled", ls.cancelled},
                   {"prefetched", ls.prefetched},
                   {"prefetch_used", ls.prefetch_used},
-                  {"cuts", cut_json}};
+                  {"cuts", cut_json},
+                  {"allocator", allocator_description()}};
   if (movie_stats) {
     summary["movie"] = {{"file", out},
                         {"codec", options->video.codec},
