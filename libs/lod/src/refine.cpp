@@ -365,6 +365,8 @@ constexpr double kMinBudget = 1.0 / 16, kMaxBudget = 4;
 // Views kept: a block decided longer ago is decided again.
 constexpr size_t kViews = 64;
 constexpr uint32_t kIdle = 2, kProbe = 4;
+// Top-down: diamonds decided ahead of the one whose data is fetched.
+constexpr size_t kAhead = 8;
 // Margins kept against rounding: relative on bounds and distances (their
 // rounding is ~1e-15), metres on distances, radians on angles (acos near 0
 // loses ~1e-8).
@@ -515,10 +517,19 @@ class Refiner {
       }
     }
     // Split children of splits made while preparing are in work_ already.
+    // Generation by generation (the children of this one's splits go to
+    // the next): the final marks do not depend on the order (a child's
+    // criterion never exceeds its parent's), and in this order the errors
+    // and marks of the diamond kAhead places on can be fetched while this
+    // one is decided. Depth first, a child was decided right after it was
+    // pushed: reading its diamond's error missed the caches.
     while (!work_.empty()) {
-      const Located l = work_.back();
-      work_.pop_back();
-      decide(l.quad, l.p);
+      generation_.swap(work_);
+      for (size_t i = 0; i < generation_.size(); ++i) {
+        if (i + kAhead < generation_.size()) prefetch(generation_[i + kAhead]);
+        decide(generation_[i].quad, generation_[i].p);
+      }
+      generation_.clear();
     }
   }
 
@@ -959,14 +970,9 @@ class Refiner {
       // The children of a diagonal of h are axis diamonds of s = h, those
       // of an axis diamond of s diagonals of h = s / 2 (always splittable).
       if (top_down_ && (d.kind != MarkKind::kDiagonal || d.size >= 2)) {
-        const DiamondErrors* errors = quads_[static_cast<size_t>(l.quad)].errors.get();
         for (const GridPoint& c : d.children(l.p)) {
           if (!grid_.inside(c)) continue;
           work_.push_back({l.quad, c});
-          // Read when the child is decided: fetched meanwhile.
-          const uint32_t slot = grid_.slot(c);
-          marks_.prefetch(l.quad, slot);
-          if (errors) __builtin_prefetch(&errors->at[slot]);
         }
       }
       if (const auto other = mirror(l.quad, l.p)) stack_.push_back(*other);
@@ -1224,6 +1230,17 @@ class Refiner {
     allow(b, move, turn);
   }
 
+  // The mark and error of a diamond about to be decided.
+  void prefetch(const Located& l) const {
+    const Diamond d = grid_.diamond(l.p);
+    if (!MarkGrid::splittable(d)) return;
+    const uint32_t slot = grid_.slot(l.p);
+    marks_.prefetch(l.quad, slot);
+    if (const DiamondErrors* e = quads_[static_cast<size_t>(l.quad)].errors.get()) {
+      __builtin_prefetch(&e->at[slot]);
+    }
+  }
+
   // Evaluates the split criterion of an undecided mark (for both quads when
   // it lies on their shared side) and splits it or keeps it.
   void decide(int q, GridPoint p) {
@@ -1308,7 +1325,7 @@ class Refiner {
   int64_t globe_width_ = 0;
   std::vector<Quad> quads_;
   bool top_down_;
-  std::vector<Located> stack_, work_;
+  std::vector<Located> stack_, work_, generation_;
   RefineStats stats_;
   RefineHistory::Impl* history_;
   double corner_;  // tan^2 of the screen's corner
