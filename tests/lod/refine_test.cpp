@@ -16,6 +16,7 @@
 #include <string>
 #include <unordered_map>
 #include <unordered_set>
+#include <utility>
 
 #include "../ingest/built_stores.h"
 #include "../support/test_support.h"
@@ -573,6 +574,39 @@ TEST(Refine, AFastCameraPutsTheHistoryToSleepForAWhile) {
   // and records; frame 6 reuses every decision (not after the dormant spell).
   EXPECT_TRUE(slept) << "the fast frames put the history to sleep";
   EXPECT_EQ(reused_all_at, 6);
+}
+
+TEST(Refine, AHistoryThatKeepsFindingNothingToReuseSleepsLonger) {
+  Terrain& t = pyrenees();
+  RefineHistory history;
+  RefineOptions o;
+  o.cache = &t.cache;
+  o.history = &history;
+  // A fast turn (3 degrees a frame: no decision's margins hold that long):
+  // every spell of sleep ends in a frame that reuses nothing.
+  std::vector<int> spells;  // frames asleep in a row
+  int asleep = 0;
+  for (int frame = 0; frame < 100; ++frame) {
+    SCOPED_TRACE(frame);
+    auto view = make_view(look_at(1.45, 42.55, 1500, 20000, 3.0 * frame, -35, 60, 320, 240));
+    ASSERT_TRUE(view);
+    const Selection s = select(t, *view, 1.0);
+    auto m = refine(*view, t.terrain, s, o);
+    ASSERT_TRUE(m) << m.error().message;
+    if (frame % 10 == 0) {  // asleep or not, the same mesh as without a history
+      ASSERT_EQ(m->indices, refined(t, *view, s, 1.0, RefineVariant::kTopDown).indices);
+    }
+    if (m->stats.history_asleep) {
+      ++asleep;
+    } else if (asleep > 0) {
+      spells.push_back(std::exchange(asleep, 0));
+    }
+  }
+  // 14, then 28 frames; the third spell (56) outlasts the turn.
+  ASSERT_EQ(spells.size(), 2u);
+  EXPECT_EQ(spells[0], 14);
+  EXPECT_EQ(spells[1], 28);
+  EXPECT_GE(asleep, 50);
 }
 
 }  // namespace
