@@ -500,14 +500,25 @@ TEST(Refine, ReusedDecisionsGiveTheMeshOfAFreshRefinement) {
   EXPECT_LT(evaluated, fresh_evaluated);
 }
 
+// Refinement options with the terrain's cache and a history of their own,
+// as view::Scene refines.
+struct WithHistory {
+  RefineHistory history;
+  RefineOptions options;
+  explicit WithHistory(Terrain& t) {
+    options.cache = &t.cache;
+    options.history = &history;
+  }
+  WithHistory(const WithHistory&) = delete;
+  WithHistory& operator=(const WithHistory&) = delete;
+};
+
 // A camera that does not move reuses every quad's decisions and evaluates no
 // criterion; one that jumps elsewhere reuses none.
 TEST(Refine, AStaticCameraReusesEveryQuadAndAJumpNone) {
   Terrain& t = pyrenees();
-  RefineHistory history;
-  RefineOptions o;
-  o.cache = &t.cache;
-  o.history = &history;
+  WithHistory h(t);
+  const RefineOptions& o = h.options;
   std::vector<uint32_t> first;
   for (int frame = 0; frame < 3; ++frame) {
     SCOPED_TRACE(frame);
@@ -540,10 +551,8 @@ TEST(Refine, AStaticCameraReusesEveryQuadAndAJumpNone) {
 // quads reused) and without.
 TEST(Refine, AFastCameraPutsTheHistoryToSleepForAWhile) {
   Terrain& t = pyrenees();
-  RefineHistory history;
-  RefineOptions o;
-  o.cache = &t.cache;
-  o.history = &history;
+  WithHistory h(t);
+  const RefineOptions& o = h.options;
   int reused_all_at = -1;
   bool slept = false;
   for (int frame = 0; frame < 30 && reused_all_at < 0; ++frame) {
@@ -578,10 +587,8 @@ TEST(Refine, AFastCameraPutsTheHistoryToSleepForAWhile) {
 
 TEST(Refine, AHistoryThatKeepsFindingNothingToReuseSleepsLonger) {
   Terrain& t = pyrenees();
-  RefineHistory history;
-  RefineOptions o;
-  o.cache = &t.cache;
-  o.history = &history;
+  WithHistory h(t);
+  const RefineOptions& o = h.options;
   // A fast turn (3 degrees a frame: no decision's margins hold that long):
   // every spell of sleep ends in a frame that reuses nothing.
   std::vector<int> spells;  // frames asleep in a row
