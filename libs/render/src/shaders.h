@@ -36,6 +36,16 @@ layout(location = 2) in uint quad_index;  // per draw (instanced: the draw's bas
 // eight vertices at a time.
 uniform samplerBuffer records;
 vec4 record(int i) { return texelFetch(records, int(quad_index) * 22 + i); }
+// The texels that do not depend on the vertex's corner come as attributes
+// of the quad's draw instead (the records' buffer bound per instance, each
+// draw's base instance its quad): llvmpipe loads an attribute, where a
+// texel goes through its sampler (a third of the shader's fetches).
+layout(location = 3) in vec4 own_window;      // texel 16
+layout(location = 4) in vec4 parent_window;   // 17
+layout(location = 5) in vec4 imagery_window;  // 18
+layout(location = 6) in vec4 quad_size;       // 19
+layout(location = 7) in uvec4 slots;          // 20 (integer: the bits as they are)
+layout(location = 8) in float spacing;        // 21.x
 
 uniform mat4 view_projection;
 uniform sampler2DArray heights;
@@ -77,7 +87,6 @@ float bilinear(int layer, vec2 p) {
 }
 
 void main() {
-  uvec4 slots = floatBitsToUint(record(20));
   uint bits = slots.w;
   uint coarse_sides = (bits >> 4) & 15u, coarse_corners = (bits >> 8) & 15u;
   bool parent = ((flags & 15u) & coarse_sides) != 0u || (((flags >> 4) & 15u) & coarse_corners) != 0u;
@@ -98,9 +107,8 @@ void main() {
   ivec2 a = ivec2(p.x == 1.0 ? 1 : 0, p.y == 1.0 ? 1 : 0);
   int corner = first + a.y * 2 + a.x;
   vec2 d = p - vec2(a);
-  vec4 size = record(19);
-  float lam = d.x * (scale * size.x) * kDeg;
-  float phi = -(d.y * (scale * size.y)) * kDeg;
+  float lam = d.x * (scale * quad_size.x) * kDeg;
+  float phi = -(d.y * (scale * quad_size.y)) * kDeg;
 
   vec4 anchor = record(corner);
   vec4 t = record(8 + corner);
@@ -122,22 +130,19 @@ void main() {
                      (1.0 - kE2) * (dn * sp + na * dsp));
   vec3 up = vec3(cp * cl, cp * sl, sp);
 
-  vec4 own_window = record(16);
   float h = 0.0;
   if (parent_data) {
-    vec4 w = record(17);
-    if ((bits & 2u) != 0u) h = bilinear(int(slots.y), w.xy + uv * w.zw);
+    if ((bits & 2u) != 0u) h = bilinear(int(slots.y), parent_window.xy + uv * parent_window.zw);
   } else if ((bits & 1u) != 0u) {
     h = bilinear(int(slots.x), own_window.xy + uv * own_window.zw);
   }
-  vec4 iw = record(18);
   sample_position = own_window.xy + uv * own_window.zw;
-  imagery_position = iw.xy + uv * iw.zw;
+  imagery_position = imagery_window.xy + uv * imagery_window.zw;
   height = h;
-  cos_lat = cos(radians(mix(size.z, size.w, uv.y)));
+  cos_lat = cp;  // of the vertex's latitude, made above without a cosine
   layers = ivec2(slots.xz);
   has = bits & 5u;
-  sample_metres = record(21).x;
+  sample_metres = spacing;
   vec3 position = anchor.xyz + offset + up * (h * exaggeration);
   captured_position = position;
   gl_Position = view_projection * vec4(position, 1.0);

@@ -177,6 +177,14 @@ class GlTerrainRenderer final : public TerrainRenderer {
     vao_.attribute(1, 0, 1, GL_UNSIGNED_INT, offsetof(GridVertex, flags));
     vao_.attribute(2, 1, 1, GL_UNSIGNED_INT, 0);
     glVertexArrayBindingDivisor(vao_.id(), 1, 1);
+    // Per quad: its record's fields that do not depend on the corner (shaders.h).
+    vao_.attribute(3, 2, 4, GL_FLOAT, offsetof(QuadRecord, own_window));
+    vao_.attribute(4, 2, 4, GL_FLOAT, offsetof(QuadRecord, parent_window));
+    vao_.attribute(5, 2, 4, GL_FLOAT, offsetof(QuadRecord, imagery_window));
+    vao_.attribute(6, 2, 4, GL_FLOAT, offsetof(QuadRecord, size));
+    vao_.attribute(7, 2, 4, GL_UNSIGNED_INT, offsetof(QuadRecord, slots));
+    vao_.attribute(8, 2, 1, GL_FLOAT, offsetof(QuadRecord, shade));
+    glVertexArrayBindingDivisor(vao_.id(), 2, 1);
     // Bound where a kind has no tiles yet.
     const float zero[4] = {};
     for (gl::TextureArray* a : {&empty_heights_, &empty_slopes_, &empty_imagery_}) {
@@ -406,6 +414,7 @@ class GlTerrainRenderer final : public TerrainRenderer {
                               refined ? grids_.at(refined_k_).id() : mesh_vertices_.id(), 0,
                               sizeof(GridVertex));
     glVertexArrayVertexBuffer(vao_.id(), 1, quad_ids_.id(), 0, sizeof(uint32_t));
+    glVertexArrayVertexBuffer(vao_.id(), 2, records_buffer_.id(), 0, sizeof(QuadRecord));
     glVertexArrayElementBuffer(vao_.id(), refined ? refined_indices_.id() : mesh_indices_.id());
     glBindTextureUnit(2, records_texture_.id());
     glBindBuffer(GL_DRAW_INDIRECT_BUFFER, commands_buffer_.id());
