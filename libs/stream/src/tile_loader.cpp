@@ -110,6 +110,7 @@ struct TileLoader::Impl {
   LoaderStats counters;
   uint64_t resident_bytes = 0;
   uint32_t in_flight = 0, prefetch_in_flight = 0;
+  uint32_t announcing = 0;  // on_settled calls running (the loader is not idle until they return)
   // Render thread only.
   std::unordered_map<TileKey, Request, geo::TileKeyHash> frame_requests;
   std::vector<std::function<void(const TileEvent&)>> listeners;
@@ -279,9 +280,11 @@ struct TileLoader::Impl {
   // LoaderOptions::on_settled, without the lock (the listener may ask for stats()).
   void settled(std::unique_lock<std::mutex>& lock) {
     if (!options.on_settled) return;
+    ++announcing;
     lock.unlock();
     options.on_settled();
     lock.lock();
+    --announcing;
   }
 };
 
@@ -435,7 +438,7 @@ TileState TileLoader::state(const TileKey& key) const {
 
 bool TileLoader::idle() const {
   std::lock_guard lock(impl_->mutex);
-  return impl_->queue.empty() && impl_->in_flight == 0;
+  return impl_->queue.empty() && impl_->in_flight == 0 && impl_->announcing == 0;
 }
 
 }  // namespace relief::stream

@@ -112,7 +112,8 @@ class TileLoader final : public lod::TileProvider {
   void subscribe(std::function<void(const TileEvent&)> listener);
   LoaderStats stats() const;
   TileState state(const geo::TileKey& key) const;
-  // Nothing queued or loading.
+  // Nothing queued or loading, and every load that ended announced
+  // (LoaderOptions::on_settled has returned).
   bool idle() const;
 
  private:
