@@ -43,8 +43,8 @@ void keep_freed_memory() {
   unsigned arenas = 0;
   size_t size = sizeof arenas;
   if (mallctl("arenas.narenas", &arenas, &size, nullptr, 0) != 0) return;
-  for (unsigned i = 0; i < arenas;
-       ++i) {  // an arena not made yet refuses: it will follow the above
+  // An arena not made yet refuses: it will follow the defaults set above.
+  for (unsigned i = 0; i < arenas; ++i) {
     for (const char* kind : {"dirty", "muzzy"}) {
       const std::string name = fmt::format("arena.{}.{}_decay_ms", i, kind);
       mallctl(name.c_str(), nullptr, nullptr, &never, sizeof never);
