@@ -7,7 +7,8 @@
 namespace relief::cli {
 
 // "jemalloc <version> (transparent huge pages: <mode>)", with "; freed
-// memory kept" after keep_freed_memory(), or "system malloc".
+// memory kept" after keep_freed_memory(), or "system malloc"; then
+// prefault_note().
 std::string allocator_description();
 
 // Called with a command's --memory budget before its work starts. Under a
@@ -35,5 +36,20 @@ void give_up_huge_pages();
 // their byte budgets whatever the allocator keeps; the process's resident
 // memory stays at its peak. Overrides MALLOC_CONF's decay settings.
 void keep_freed_memory();
+
+// For the same commands, on the thread that will draw the frames, after
+// keep_freed_memory(): touches `bytes` of that thread's heap now and frees
+// it, kept, so that the frames' buffers, as they grow to their peak, reuse
+// pages already in memory instead of faulting in fresh ones mid-flight. On
+// this project's virtual machines the host backs a page at its first touch
+// (7-13 us per 4 KiB page, a few ms per 2 MiB huge page): on bench/stream's
+// Himalaya flight the frames that took even one fault were among the
+// slowest, and 64 MiB made p99/p50 1.29-1.39 instead of 1.49-1.53
+// (docs/building.md, "Allocator"). The memory stays the process's.
+void prefault_frame_heap(uint64_t bytes);
+constexpr uint64_t kFrameHeapBytes = uint64_t{64} << 20;
+// "; N MiB of heap faulted in" after prefault_frame_heap(), else "" (for
+// allocator_description()).
+std::string prefault_note();
 
 }  // namespace relief::cli

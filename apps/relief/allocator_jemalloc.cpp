@@ -31,8 +31,8 @@ std::string allocator_description() {
   ssize_t decay = 0;
   size = sizeof decay;
   const bool kept = mallctl("arena.0.dirty_decay_ms", &decay, &size, nullptr, 0) == 0 && decay < 0;
-  return fmt::format("jemalloc {} (transparent huge pages: {}{})", version, thp,
-                     kept ? "; freed memory kept" : "");
+  return fmt::format("jemalloc {} (transparent huge pages: {}{}{})", version, thp,
+                     kept ? "; freed memory kept" : "", prefault_note());
 }
 
 void keep_freed_memory() {

@@ -7,7 +7,8 @@
 namespace relief::cli {
 
 std::string allocator_description() {
-  return "system malloc";
+  const std::string note = prefault_note();
+  return note.empty() ? "system malloc" : "system malloc (" + note.substr(2) + ")";
 }
 
 void keep_freed_memory() {

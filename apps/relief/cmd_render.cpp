@@ -285,6 +285,7 @@ int run_render(const std::vector<std::string>& command_line) {
   if (!setup) return report_error(setup.error().message);
   if (args->get("--path")) {
     keep_freed_memory();  // frame after frame
+    prefault_frame_heap(kFrameHeapBytes);
     return render_path(*args, *setup);
   }
   return render_still(*args, *setup);

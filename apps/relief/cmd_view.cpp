@@ -207,6 +207,7 @@ nlohmann::json stats_json(const window::ViewerSummary& s, const std::string& ren
                       {"swap_ms", f.swap_ms},
                       {"present_ms", f.present_ms},
                       {"tiles_uploaded", f.tiles_uploaded},
+                      {"page_faults", f.page_faults},
                       {"pixel_error", f.pixel_error},
                       {"speed_factor", f.speed_factor},
                       {"budget_factor", f.budget_factor},
@@ -366,6 +367,7 @@ int run_view(const std::vector<std::string>& command_line) {
   auto setup = parse_render_setup(*args, std::move(layers->textures), std::move(layers->elevation));
   if (!setup) return report_error(setup.error().message);
   keep_freed_memory();
+  prefault_frame_heap(kFrameHeapBytes);
   return view_session(*args, *setup);
 }
 

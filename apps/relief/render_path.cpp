@@ -253,6 +253,7 @@ int render_path(const Args& args, RenderSetup& setup, const Clock& clock) {
          {camera.lon, camera.lat, camera.height, camera.heading, camera.pitch, camera.roll}},
         {"frame_ms", r.report.frame_seconds * 1e3},
         {"cpu_ms", r.report.cpu_seconds * 1e3},
+        {"page_faults", r.report.page_faults},
         {"selection_ms", r.report.selection.seconds * 1e3},
         {"draw_ms", (frame.prepare_seconds + frame.gpu_seconds) * 1e3},
         {"gpu_ms", frame.gpu_seconds * 1e3},

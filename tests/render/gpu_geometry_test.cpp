@@ -370,6 +370,26 @@ TEST_F(PyreneesGeometry, AStaticViewUploadsNothingAfterItsFirstFrame) {
   EXPECT_EQ(r2->texture_bytes, 0u);
 }
 
+// The first layers of the elevation arrays come with the renderer, not with
+// the first frame's first tile (on llvmpipe here their allocation took ~36 ms
+// of the first frame of a flight): a frame that draws nothing finds them.
+TEST_F(PyreneesGeometry, TheRendererAllocatesItsFirstLayersBeforeAnyFrame) {
+  auto renderer = TerrainRenderer::create(terrain_, nullptr);
+  ASSERT_TRUE(renderer) << renderer.error().message;
+  auto target = make_offscreen_target(160, 120);
+  ASSERT_TRUE(target);
+  auto f = (*renderer)->draw(view(), lod::Selection{}, **target, {});
+  ASSERT_TRUE(f) << f.error().message;
+  const int b = terrain_.border();
+  const uint64_t tile_bytes = static_cast<uint64_t>(terrain_.tile_width() + 2 * b) *
+                              static_cast<uint64_t>(terrain_.tile_height() + 2 * b) * (4 + 4);
+  EXPECT_EQ(f->gpu_slots, static_cast<uint32_t>(TileSlots::kFirstLayers));
+  EXPECT_EQ(f->gpu_allocated_bytes, TileSlots::kFirstLayers * tile_bytes);
+  EXPECT_EQ(f->uploads, 0u);
+  EXPECT_EQ(f->gpu_textures, 0u);
+  EXPECT_EQ(f->triangles, 0u);
+}
+
 TEST_F(PyreneesGeometry, StatisticsOfAKnownSelection) {
   auto renderer = TerrainRenderer::create(terrain_, nullptr);
   ASSERT_TRUE(renderer) << renderer.error().message;
@@ -569,6 +589,34 @@ TEST(TileSlots, AFullArrayReusesALayerUnlessTheFramePinsHalfOfIt) {
     ASSERT_TRUE(layer) << x;
     EXPECT_EQ(layer_texels(slots.heights(), *layer), pixels(x)) << x;
   }
+}
+
+// Allocated ahead of the first tile (the renderer knows the store's tile
+// size): the tiles then take free layers, nothing grows, and a tile of
+// another size is refused as before.
+TEST(TileSlots, AllocatedAheadTheFirstTilesTakeItsLayers) {
+  gl();
+  TileSlots slots(uint64_t{1} << 30, 4096);
+  slots.allocate(false, 4, 4);
+  const int n = TileSlots::kFirstLayers;
+  EXPECT_EQ(slots.heights().layers(), n);
+  EXPECT_EQ(slots.slopes().layers(), n);
+  EXPECT_EQ(slots.imagery().layers(), 0);
+  EXPECT_EQ(slots.count(), 0u);
+  EXPECT_EQ(slots.used_bytes(), 0u);
+  slots.allocate(false, 8, 8);  // sized already: nothing
+  EXPECT_EQ(slots.heights().width(), 4);
+  gl::Uploads uploads;
+  slots.begin_frame();
+  const std::vector<float> pixels(16, 3.0f);
+  auto layer = slots.insert(TextureKey{TileKey{3, 1, 0}, false}, 4, 4, pixels.data(), uploads);
+  ASSERT_TRUE(layer);
+  EXPECT_EQ(*layer, 0);
+  EXPECT_EQ(layer_texels(slots.heights(), *layer), pixels);
+  EXPECT_EQ(slots.heights().layers(), n);
+  EXPECT_EQ(uploads.textures, 16u * (4 + 4));
+  EXPECT_FALSE(slots.insert(TextureKey{TileKey{3, 2, 0}, false}, 5, 4, pixels.data(), uploads));
+  EXPECT_EQ(gl_error(), "");
 }
 
 // Composites (written on the GPU, costly to remake) are kept: their array

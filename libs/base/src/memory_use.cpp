@@ -2,6 +2,7 @@
 
 #include <cstdio>
 
+#include <sys/resource.h>
 #include <unistd.h>
 
 namespace relief {
@@ -14,6 +15,12 @@ uint64_t resident_set_bytes() {
   std::fclose(f);
   if (n != 2) return 0;
   return resident * static_cast<uint64_t>(sysconf(_SC_PAGESIZE));
+}
+
+uint64_t thread_page_faults() {
+  rusage u{};
+  if (getrusage(RUSAGE_THREAD, &u) != 0) return 0;
+  return static_cast<uint64_t>(u.ru_minflt) + static_cast<uint64_t>(u.ru_majflt);
 }
 
 uint64_t physical_memory_bytes() {

@@ -192,8 +192,56 @@ class GlTerrainRenderer final : public TerrainRenderer {
       a->reserve(1);
       a->upload(0, zero, setup);
     }
+    // The arrays' first layers, before the first frame (TileSlots::allocate).
+    if (const tiles::Store* s = elevation_.store()) {
+      slots_.allocate(false, s->grid().padded_width(), s->grid().padded_height());
+    }
+    if (imagery_) {
+      slots_.allocate(true, imagery_->grid().padded_width(), imagery_->grid().padded_height());
+    }
     if (auto e = gl_error(); !e.empty()) return fail("renderer setup: " + e);
+    return warm_up();
+  }
+
+  // llvmpipe compiles a program's machine code for the GL state of its first
+  // draw (25-100 ms here): one draw now, of a triangle that covers nothing,
+  // with the state and texture formats of the frames, so that the first frame
+  // of a view or a flight does not stall on it. The buffers it writes are
+  // rewritten by the first frame.
+  Status warm_up() {
+    auto target = RELIEF_TRY(make_offscreen_target(1, 1));
+    records_.assign(1, QuadRecord{});
+    commands_.assign(1, DrawCommand{3, 1, 0, 0, 0});
+    gl::Uploads ignored;
+    if (write_if_changed(records_buffer_, previous_records_, records_, ignored)) {
+      records_texture_.attach(records_buffer_);
+    }
+    write_if_changed(commands_buffer_, previous_commands_, commands_, ignored);
+    const uint32_t id = 0;
+    quad_ids_ = gl::Buffer::make_static(&id, sizeof id, ignored);
+    lod::View view;
+    view.right = {1, 0, 0}, view.up = {0, 1, 0}, view.forward = {0, 0, -1};
+    view.width = view.height = 1;
+    view.tan_half_x = view.tan_half_y = 1;
+    target->bind();
+    set_draw_state(RenderOptions{});
+    bind(program_, view, RenderOptions{});
+    glMultiDrawElementsIndirect(GL_TRIANGLES, GL_UNSIGNED_INT, nullptr, 1, 0);
+    glFinish();
+    if (auto e = gl_error(); !e.empty()) return fail("renderer warm-up: " + e);
     return {};
+  }
+
+  void set_draw_state(const RenderOptions& o) {
+    glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_GREATER);
+    glEnable(GL_CULL_FACE);
+    glCullFace(GL_BACK);
+    glFrontFace(GL_CCW);
+    glClearColor(o.sky[0], o.sky[1], o.sky[2], 1);
+    glClearDepth(0);
+    glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
   }
 
   Result<FrameStats> draw(const lod::View& view, const lod::Selection& selection,
@@ -217,15 +265,7 @@ class GlTerrainRenderer final : public TerrainRenderer {
     // vertex reaches the same clip coordinates as in the whole image and the
     // windows of a view assemble into exactly its image.
     if (!w.empty()) glViewport(-w.x, w.y + w.height - view.height, view.width, view.height);
-    glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
-    glEnable(GL_DEPTH_TEST);
-    glDepthFunc(GL_GREATER);
-    glEnable(GL_CULL_FACE);
-    glCullFace(GL_BACK);
-    glFrontFace(GL_CCW);
-    glClearColor(o.sky[0], o.sky[1], o.sky[2], 1);
-    glClearDepth(0);
-    glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+    set_draw_state(o);
     bind(program_, view, o);
     glPolygonMode(GL_FRONT_AND_BACK, o.wireframe ? GL_LINE : GL_FILL);
     stats.draw_calls = multi_draw(selection);

@@ -46,6 +46,28 @@ bool TileSlots::evict_one(std::optional<bool> imagery) {
   return false;
 }
 
+void TileSlots::grow(bool imagery, uint64_t layer_bytes) {
+  Pool p = pool(imagery);
+  // Double, but not past what the budget holds unless the frame needs it.
+  const int old = p.array.layers();
+  const int fits =
+      static_cast<int>(std::min<uint64_t>(budget_ / layer_bytes, uint64_t(max_layers_)));
+  int layers = old == 0 ? kFirstLayers : old * 2;
+  if (layers > fits) layers = std::max(fits, old + 16);
+  layers = std::min(layers, max_layers_);
+  p.array.reserve(layers);
+  if (!imagery) slopes_.reserve(layers);
+  for (int l = layers - 1; l >= old; --l) p.free.push_back(l);
+}
+
+void TileSlots::allocate(bool imagery, int width, int height) {
+  Pool p = pool(imagery);
+  if (p.array.sized()) return;
+  p.array.set_layer_size(width, height);
+  if (!imagery) slopes_.set_layer_size(width, height);
+  grow(imagery, p.array.layer_bytes() + (imagery ? 0 : slopes_.layer_bytes()));
+}
+
 Result<int> TileSlots::insert(const TextureKey& key, int width, int height, const void* pixels,
                               gl::Uploads& uploads) {
   Pool p = pool(key.imagery);
@@ -66,17 +88,7 @@ Result<int> TileSlots::insert(const TextureKey& key, int width, int height, cons
   // Full, with fewer than half its layers pinned: a layer is reused rather
   // than every layer copied into a larger array (uploaded tiles only).
   if (p.free.empty() && pixels && 2 * p.pinned < p.array.layers()) evict_one(key.imagery);
-  if (p.free.empty()) {
-    // Double, but not past what the budget holds unless the frame needs it.
-    const int old = p.array.layers();
-    const int fits = static_cast<int>(std::min<uint64_t>(budget_ / bytes, uint64_t(max_layers_)));
-    int layers = old == 0 ? kFirstLayers : old * 2;
-    if (layers > fits) layers = std::max(fits, old + 16);
-    layers = std::min(layers, max_layers_);
-    p.array.reserve(layers);
-    if (!key.imagery) slopes_.reserve(layers);
-    for (int l = layers - 1; l >= old; --l) p.free.push_back(l);
-  }
+  if (p.free.empty()) grow(key.imagery, bytes);
   const int layer = p.free.back();
   p.free.pop_back();
   if (pixels) p.array.upload(layer, pixels, uploads);

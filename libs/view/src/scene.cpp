@@ -11,6 +11,7 @@
 
 #include <fmt/format.h>
 
+#include "relief/base/memory_use.h"
 #include "relief/lod/split_feedback.h"
 #include "relief/render/overlay.h"
 #include "relief/stream/radius_pager.h"
@@ -279,6 +280,7 @@ Result<FrameReport> Scene::draw(const lod::Camera& camera, render::RenderTarget&
   FrameReport report;
   report.camera = camera;
   const auto start = m.clock.now();
+  const uint64_t faults_before = thread_page_faults();
   if (m.frozen && m.drawn) {  // the last frame's pins stay: no begin_frame()
     const lod::RefinedMesh* refined = m.last_refined ? &*m.last_refined : nullptr;
     if (before_drawing) before_drawing();
@@ -286,6 +288,7 @@ Result<FrameReport> Scene::draw(const lod::Camera& camera, render::RenderTarget&
     if (m.hints) RELIEF_CHECK(m.draw_hints(view, m.last, target, report, *this));
     report.frame_seconds = seconds_between(start, m.clock.now());
     report.cpu_seconds = report.frame_seconds - report.draw.gpu_seconds;
+    report.page_faults = thread_page_faults() - faults_before;
     report.selection = m.last.stats;
     if (refined) report.refine = refined->stats;
     m.previous.reset();  // no motion to prefetch along when thawed
@@ -331,6 +334,7 @@ Result<FrameReport> Scene::draw(const lod::Camera& camera, render::RenderTarget&
   if (m.hints) RELIEF_CHECK(m.draw_hints(view, selection, target, report, *this));
   report.frame_seconds = seconds_between(start, m.clock.now());
   report.cpu_seconds = report.frame_seconds - report.draw.gpu_seconds;
+  report.page_faults = thread_page_faults() - faults_before;
   report.selection = selection.stats;
   report.complete = selection.stats.waiting == 0 && !wants_more &&
                     report.draw.texture_misses == 0 && report.hint_tiles_pending == 0;

@@ -343,6 +343,7 @@ Result<bool> Viewer::frame() {
     f.speed_factor = v.speed_lod.factor();
     f.budget_factor = v.frame_budget.factor();
     f.select_ms = report.select_seconds * 1e3;
+    f.page_faults = report.page_faults;
     f.prepare_ms = report.draw.prepare_seconds * 1e3;
     f.gpu_ms = report.draw.gpu_seconds * 1e3;
     f.submit_ms = report.draw.submit_seconds * 1e3;

@@ -189,6 +189,17 @@ void on_framebuffer_size(GLFWwindow* w, int width, int height) {
 
 }  // namespace
 
+namespace {
+// The frame drawn offscreen into the window's back buffer.
+void copy_to_screen(render::RenderTarget& target, int width, int height) {
+  target.bind();  // the read framebuffer of the copy
+  glBindFramebuffer(GL_DRAW_FRAMEBUFFER, 0);
+  glBlitFramebuffer(0, 0, target.width(), target.height(), 0, 0, width, height, GL_COLOR_BUFFER_BIT,
+                    GL_NEAREST);
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+}
+}  // namespace
+
 Result<std::unique_ptr<Window>> Window::create(const WindowOptions& options) {
   assert(!g_open && "one Window at a time");
   glfwSetErrorCallback(on_glfw_error);
@@ -228,6 +239,15 @@ Result<std::unique_ptr<Window>> Window::create(const WindowOptions& options) {
   int width = 0, height = 0;
   glfwGetFramebufferSize(impl->window, &width, &height);
   RELIEF_CHECK(impl->target.resize(std::max(width, 1), std::max(height, 1)));
+  // The first copy to the screen and the first swap cost 35-90 ms on this
+  // project's machines (llvmpipe compiles the copy's shaders; the X server's
+  // side of the window is set up): both once now, with a black frame,
+  // instead of in the first frames. Not counted in swaps().
+  impl->target.bind();
+  glClearColor(0, 0, 0, 1);
+  glClear(GL_COLOR_BUFFER_BIT);
+  copy_to_screen(impl->target, width, height);
+  glfwSwapBuffers(impl->window);
 
   IMGUI_CHECKVERSION();
   ImGui::CreateContext();
@@ -310,11 +330,7 @@ void Window::swap_pending() {
   glfwGetFramebufferSize(impl_->window, &width, &height);
   // The copy reads the target, so it waits for the GL to finish drawing it
   // (llvmpipe): hence it is deferred with the swap.
-  impl_->target.bind();  // the read framebuffer of the copy
-  glBindFramebuffer(GL_DRAW_FRAMEBUFFER, 0);
-  glBlitFramebuffer(0, 0, impl_->target.width(), impl_->target.height(), 0, 0, width, height,
-                    GL_COLOR_BUFFER_BIT, GL_NEAREST);
-  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  copy_to_screen(impl_->target, width, height);
   glViewport(0, 0, width, height);
   if (ui) {
     ImGui_ImplOpenGL3_NewFrame();

@@ -8,5 +8,10 @@ namespace relief {
 uint64_t resident_set_bytes();
 // Physical memory of the machine in bytes, 0 if unknown.
 uint64_t physical_memory_bytes();
+// Page faults the calling thread has taken so far (minor and major), for
+// per-frame statistics: a frame that touches memory no frame touched before
+// pays for every page, and on a virtual machine whose memory the host backs
+// on first touch (this project's: ~7-13 us per 4 KiB) that is a stall.
+uint64_t thread_page_faults();
 
 }  // namespace relief

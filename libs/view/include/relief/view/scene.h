@@ -88,6 +88,8 @@ struct FrameReport {
   // (refinement and drawing are in refine and draw).
   double select_seconds = 0;
   double cpu_seconds = 0;  // the same without the wait for the GPU
+  // Page faults the frame took on the thread that drew it (thread_page_faults).
+  uint64_t page_faults = 0;
   // Everything this frame wanted was resident and drawn (elevation and
   // imagery): the frame equals the complete frame of its camera.
   bool complete = false;
