@@ -7,8 +7,18 @@
 // at start-up (GLIBC_TUNABLES=glibc.malloc.hugetlb=1); jemalloc reads this
 // symbol, so the choice is part of the program, not of its environment
 // (MALLOC_CONF still overrides it).
+#include <condition_variable>
 #include <cstddef>
+#include <cstdlib>
+#include <deque>
+#include <mutex>
 #include <string>
+#include <thread>
+#include <vector>
+
+#include <pthread.h>
+#include <sys/resource.h>
+#include <unistd.h>
 
 #include <fmt/format.h>
 #include <jemalloc/jemalloc.h>
@@ -33,6 +43,85 @@ std::string allocator_description() {
   const bool kept = mallctl("arena.0.dirty_decay_ms", &decay, &size, nullptr, 0) == 0 && decay < 0;
   return fmt::format("jemalloc {} (transparent huge pages: {}{}{})", version, thp,
                      kept ? "; freed memory kept" : "", prefault_note());
+}
+
+namespace {
+
+// The helper thread of prefault_in_background(). The blocks asked while it
+// works are freed together: a block freed before the next is allocated
+// would be that block again (and jemalloc does not serve two blocks from
+// the halves of one freed twice as large, measured). Each is an eighth
+// larger than asked: a driver pads rows (llvmpipe: 530 texels of 4 bytes
+// take 2176), and a smaller free block would not serve it.
+class Prefaulter {
+ public:
+  ~Prefaulter() {
+    {
+      std::lock_guard lock(mutex_);
+      stop_ = true;
+    }
+    wake_.notify_one();
+    if (thread_.joinable()) thread_.join();
+  }
+
+  // On the thread that will allocate the block: blocks under 8 MiB come
+  // from that thread's arena, which the helper then uses too.
+  void request(uint64_t bytes) {
+    unsigned arena = 0;
+    size_t size = sizeof arena;
+    if (mallctl("thread.arena", &arena, &size, nullptr, 0) != 0) return;
+    {
+      std::lock_guard lock(mutex_);
+      queue_.push_back({bytes, arena});
+      if (!thread_.joinable()) thread_ = std::thread([this] { run(); });
+    }
+    wake_.notify_one();
+  }
+
+ private:
+  void run() {
+    pthread_setname_np(pthread_self(), "relief-prefault");
+    setpriority(PRIO_PROCESS, static_cast<id_t>(gettid()), 10);  // below the render thread
+    std::unique_lock lock(mutex_);
+    std::vector<void*> held;
+    while (true) {
+      if (queue_.empty()) {
+        for (void* p : held) std::free(p);
+        held.clear();
+      }
+      wake_.wait(lock, [this] { return stop_ || !queue_.empty(); });
+      if (stop_) return;
+      const auto [bytes, arena] = queue_.front();
+      queue_.pop_front();
+      lock.unlock();
+      unsigned own = arena;
+      mallctl("thread.arena", nullptr, nullptr, &own, sizeof own);
+      const uint64_t padded = bytes + bytes / 8;
+      if (void* p = std::malloc(padded)) {
+        auto* page = static_cast<volatile char*>(p);  // volatile: the stores happen
+        for (uint64_t i = 0; i < padded; i += 4096) page[i] = 0;
+        held.push_back(p);
+      }
+      lock.lock();
+    }
+  }
+
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  struct Block {
+    uint64_t bytes;
+    unsigned arena;
+  };
+  std::deque<Block> queue_;
+  bool stop_ = false;
+  std::thread thread_;
+};
+
+}  // namespace
+
+void prefault_in_background(uint64_t bytes) {
+  static Prefaulter prefaulter;
+  prefaulter.request(bytes);
 }
 
 void keep_freed_memory() {

@@ -19,4 +19,6 @@ void keep_freed_memory() {
   ::mallopt(M_TRIM_THRESHOLD, 256 << 20);
 }
 
+void prefault_in_background(uint64_t) {}
+
 }  // namespace relief::cli

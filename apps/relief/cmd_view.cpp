@@ -283,6 +283,7 @@ int view_session(const Args& args, RenderSetup& setup) {
   // The render thread keeps a core while tiles are prepared (docs/streaming.md).
   so.loader.max_preparing = std::max(1, static_cast<int>(std::thread::hardware_concurrency()) - 1);
   so.lookahead_frames = 15;  // half a second ahead at 30 fps
+  so.on_growth_ahead = prefault_in_background;
 
   window::WindowOptions wo;
   wo.width = setup.width;

@@ -200,6 +200,7 @@ int render_path(const Args& args, RenderSetup& setup, const Clock& clock) {
   }
 
   view::SceneOptions so = scene_options(setup);
+  so.on_growth_ahead = prefault_in_background;
   // A movie of a remote store (or a simulated link): complete frames from an
   // interactive scene that waits for each frame's tiles while the path ahead
   // is prefetched on the loaders' threads (PathOptions::wait_complete), so

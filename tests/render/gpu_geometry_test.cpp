@@ -619,6 +619,40 @@ TEST(TileSlots, AllocatedAheadTheFirstTilesTakeItsLayers) {
   EXPECT_EQ(gl_error(), "");
 }
 
+// The next growth's bytes are announced once per size, when a frame pins
+// 3/8 of an array's layers (uploaded tiles grow once a frame pins half of a
+// full array), for the heights' array and their slopes' apart.
+TEST(TileSlots, AnnouncesTheNextGrowthBeforeItComes) {
+  gl();
+  TileSlots slots(uint64_t{1} << 30, 4096);
+  std::vector<uint64_t> announced;
+  slots.set_on_growth_ahead([&](uint64_t bytes) { announced.push_back(bytes); });
+  gl::Uploads uploads;
+  const std::vector<float> pixels(16, 1.0f);
+  const uint64_t n = TileSlots::kFirstLayers;
+  auto insert = [&](uint64_t x) {
+    return slots.insert(TextureKey{TileKey{12, static_cast<uint32_t>(x), 0}, false}, 4, 4,
+                        pixels.data(), uploads);
+  };
+  slots.begin_frame();
+  for (uint64_t x = 0; x + 1 < 3 * n / 8; ++x) ASSERT_TRUE(insert(x));
+  EXPECT_TRUE(announced.empty());
+  ASSERT_TRUE(insert(3 * n / 8 - 1));
+  // 2n layers of 4 x 4 texels: R32F heights and RG16F slopes.
+  EXPECT_EQ(announced, (std::vector<uint64_t>{2 * n * 64, 2 * n * 64}));
+  for (uint64_t x = 3 * n / 8; x < n; ++x) ASSERT_TRUE(insert(x));
+  EXPECT_EQ(announced.size(), 2u);
+  EXPECT_EQ(slots.heights().layers(), static_cast<int>(n));
+  // The frame needs one more: the array grows as announced, and with n + 1
+  // of its 2n layers pinned the growth after is announced.
+  ASSERT_TRUE(insert(n));
+  EXPECT_EQ(slots.heights().layers(), static_cast<int>(2 * n));
+  EXPECT_EQ(announced, (std::vector<uint64_t>{2 * n * 64, 2 * n * 64, 4 * n * 64, 4 * n * 64}));
+  ASSERT_TRUE(insert(n + 1));
+  EXPECT_EQ(announced.size(), 4u);
+  EXPECT_EQ(gl_error(), "");
+}
+
 // Composites (written on the GPU, costly to remake) are kept: their array
 // grows, up to what the budget holds, rather than reuse a layer.
 TEST(TileSlots, CompositesGrowTheArrayRatherThanGiveUpALayer) {

@@ -134,6 +134,10 @@ class GlTerrainRenderer final : public TerrainRenderer {
     return set_texture_layers(std::move(layers));
   }
 
+  void set_on_growth_ahead(std::function<void(uint64_t)> on_growth_ahead) override {
+    slots_.set_on_growth_ahead(std::move(on_growth_ahead));
+  }
+
   void set_on_processed(std::function<void()> on_processed) override {
     on_processed_ = std::move(on_processed);
   }

@@ -46,15 +46,36 @@ bool TileSlots::evict_one(std::optional<bool> imagery) {
   return false;
 }
 
-void TileSlots::grow(bool imagery, uint64_t layer_bytes) {
-  Pool p = pool(imagery);
+int TileSlots::next_layers(int old, uint64_t layer_bytes) const {
   // Double, but not past what the budget holds unless the frame needs it.
-  const int old = p.array.layers();
   const int fits =
       static_cast<int>(std::min<uint64_t>(budget_ / layer_bytes, uint64_t(max_layers_)));
   int layers = old == 0 ? kFirstLayers : old * 2;
   if (layers > fits) layers = std::max(fits, old + 16);
-  layers = std::min(layers, max_layers_);
+  return std::min(layers, max_layers_);
+}
+
+void TileSlots::announce_growth_ahead(bool imagery, bool composite) {
+  Pool p = pool(imagery);
+  const int layers = p.array.layers();
+  int& announced = imagery ? announced_imagery_ : announced_heights_;
+  if (!on_growth_ahead_ || announced == layers) return;
+  // Uploaded tiles grow a full array once a frame pins half its layers
+  // (insert()), composites whenever it is full.
+  const int in_use = layers - static_cast<int>(p.free.size());
+  if (composite ? 4 * in_use < 3 * layers : 8 * p.pinned < 3 * layers) return;
+  announced = layers;
+  const uint64_t bytes = p.array.layer_bytes() + (imagery ? 0 : slopes_.layer_bytes());
+  const int next = next_layers(layers, bytes);
+  if (next <= layers) return;
+  on_growth_ahead_(static_cast<uint64_t>(next) * p.array.layer_bytes());
+  if (!imagery) on_growth_ahead_(static_cast<uint64_t>(next) * slopes_.layer_bytes());
+}
+
+void TileSlots::grow(bool imagery, uint64_t layer_bytes) {
+  Pool p = pool(imagery);
+  const int old = p.array.layers();
+  const int layers = next_layers(old, layer_bytes);
   p.array.reserve(layers);
   if (!imagery) slopes_.reserve(layers);
   for (int l = layers - 1; l >= old; --l) p.free.push_back(l);
@@ -102,6 +123,7 @@ Result<int> TileSlots::insert(const TextureKey& key, int width, int height, cons
   used_ += bytes;
   ++uploads_;
   ++p.pinned;
+  announce_growth_ahead(key.imagery, !pixels);
   return layer;
 }
 

@@ -16,6 +16,7 @@
 // layer. Arrays of composites (tiles made on the GPU, costly to remake) grow
 // up to the budget as before.
 #include <cstdint>
+#include <functional>
 #include <list>
 #include <optional>
 #include <unordered_map>
@@ -65,6 +66,18 @@ class TileSlots {
   // Nothing when the array has its size already.
   void allocate(bool imagery, int width, int height);
 
+  // Called with the bytes an array's next growth will allocate (for heights
+  // then for their slopes' array), once per size, when it draws near: a
+  // frame pins 3/8 of the layers of an array of uploaded tiles, or 3/4 of
+  // a composites' array are in use. On llvmpipe here nearly all of a
+  // growth's time (0.57-0.69 s for 128 -> 256 layers of 530 x 274 imagery,
+  // in one frame) is the new array's fresh memory being faulted in: the
+  // caller can make that memory ready off the render thread (the relief
+  // executable does, apps/relief/allocator.h).
+  void set_on_growth_ahead(std::function<void(uint64_t bytes)> f) {
+    on_growth_ahead_ = std::move(f);
+  }
+
   // The layer of a resident tile, now pinned for this frame.
   std::optional<int> find(const TextureKey& key);
   // Uploads a tile of `width` x `height` texels (R32F heights, with the
@@ -106,15 +119,21 @@ class TileSlots {
     return imagery ? Pool{imagery_, free_imagery_, pinned_imagery_}
                    : Pool{heights_, free_heights_, pinned_heights_};
   }
-  // Adds layers to a kind's array (the first kFirstLayers, then doubling
-  // within the budget), all free.
+  // Layers an array of `old` layers grows to: the first kFirstLayers, then
+  // doubling within the budget (`layer_bytes`: of the kind's arrays).
+  int next_layers(int old, uint64_t layer_bytes) const;
+  // Adds layers to a kind's array (next_layers()), all free.
   void grow(bool imagery, uint64_t layer_bytes);
+  // set_on_growth_ahead()'s call, after an insert().
+  void announce_growth_ahead(bool imagery, bool composite);
   // Evicts the least recently used unpinned tile (of one kind, if given).
   bool evict_one(std::optional<bool> imagery);
 
   uint64_t budget_, used_ = 0, frame_ = 0, uploads_ = 0, evicted_ = 0;
   int max_layers_;
   int pinned_heights_ = 0, pinned_imagery_ = 0;
+  std::function<void(uint64_t)> on_growth_ahead_;
+  int announced_heights_ = 0, announced_imagery_ = 0;  // the layers when last announced
   gl::TextureArray heights_, slopes_, imagery_;
   std::vector<int> free_heights_, free_imagery_;
   std::list<TextureKey> order_;  // most recently used first

@@ -241,6 +241,7 @@ Result<std::unique_ptr<Scene>> Scene::create(const tiles::Store* elevation,
   }
   const auto announce = [changes = impl->changes] { changes->announce(); };
   if (options.interactive) impl->renderer->set_on_processed(announce);
+  if (options.on_growth_ahead) impl->renderer->set_on_growth_ahead(options.on_growth_ahead);
   if (options.detect) {
     for (const render::TextureLayer& l : options.texture_layers) {
       if (l.store->manifest().kind == tiles::DatasetKind::Sar) {

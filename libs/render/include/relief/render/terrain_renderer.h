@@ -151,6 +151,10 @@ class TerrainRenderer {
   // the CPU for an interactive frame is ready (a later frame draws it).
   // Set before the first draw().
   virtual void set_on_processed(std::function<void()> on_processed) = 0;
+  // Called on the render thread with the bytes the next growth of a texture
+  // array of the GPU cache will allocate, once per size, when it draws near
+  // (TileSlots::set_on_growth_ahead): time to make that memory ready.
+  virtual void set_on_growth_ahead(std::function<void(uint64_t bytes)> on_growth_ahead) = 0;
 };
 
 }  // namespace relief::render

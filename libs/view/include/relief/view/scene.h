@@ -67,6 +67,9 @@ struct SceneOptions {
   // point targets of the tiles each frame shows, drawn over the frame.
   bool detect = false;
   process::DetectorParams detector;
+  // Given to the renderer (TerrainRenderer::set_on_growth_ahead): the bytes
+  // a texture array's next growth will allocate, before it comes.
+  std::function<void(uint64_t bytes)> on_growth_ahead;
   // Interactive scenes: called on the thread that finished it each time
   // asynchronous work ends that a later frame of the same camera may draw:
   // a tile load of any loader (LoaderOptions::on_settled, after the
