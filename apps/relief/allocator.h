@@ -53,8 +53,9 @@ constexpr uint64_t kFrameHeapBytes = uint64_t{64} << 20;
 // faulted in and freed on a helper thread of low priority, so that the
 // allocation finds it in memory (jemalloc serves every block over 8 MiB
 // from one arena, whatever the thread, and keeps it after
-// keep_freed_memory()). A no-op without jemalloc (glibc's
-// malloc maps such blocks apart and unmaps them when freed). The growth of
+// keep_freed_memory()). A no-op without jemalloc (glibc's malloc maps
+// blocks over 32 MiB apart and unmaps them when freed, and keeps smaller
+// ones in the arena of the thread that freed them). The growth of
 // an imagery array from 128 to 256 layers took 0.57-0.69 s of one frame of
 // bench/view's Himalaya flight, nearly all of it the fresh pages.
 void prefault_in_background(uint64_t bytes);

@@ -7,6 +7,7 @@
 // at start-up (GLIBC_TUNABLES=glibc.malloc.hugetlb=1); jemalloc reads this
 // symbol, so the choice is part of the program, not of its environment
 // (MALLOC_CONF still overrides it).
+#include <atomic>
 #include <condition_variable>
 #include <cstddef>
 #include <cstdlib>
@@ -50,9 +51,10 @@ namespace {
 // The helper thread of prefault_in_background(). The blocks asked while it
 // works are freed together: a block freed before the next is allocated
 // would be that block again (and jemalloc does not serve two blocks from
-// the halves of one freed twice as large, measured). Each is an eighth
-// larger than asked: a driver pads rows (llvmpipe: 530 texels of 4 bytes
-// take 2176), and a smaller free block would not serve it.
+// the halves of one freed twice as large, measured). Each is a quarter
+// larger than asked: a driver pads texture rows and columns (llvmpipe:
+// widths to 4 texels and rows to 64 bytes, heights to 4 rows; 146 x 82
+// R32F layers take 12 % more), and a smaller free block would not serve it.
 class Prefaulter {
  public:
   ~Prefaulter() {
@@ -96,10 +98,10 @@ class Prefaulter {
       lock.unlock();
       unsigned own = arena;
       mallctl("thread.arena", nullptr, nullptr, &own, sizeof own);
-      const uint64_t padded = bytes + bytes / 8;
+      const uint64_t padded = bytes + bytes / 4;
       if (void* p = std::malloc(padded)) {
         auto* page = static_cast<volatile char*>(p);  // volatile: the stores happen
-        for (uint64_t i = 0; i < padded; i += 4096) page[i] = 0;
+        for (uint64_t i = 0; i < padded && !stop_; i += 4096) page[i] = 0;
         held.push_back(p);
       }
       lock.lock();
@@ -113,7 +115,7 @@ class Prefaulter {
     unsigned arena;
   };
   std::deque<Block> queue_;
-  bool stop_ = false;
+  std::atomic<bool> stop_ = false;  // also read while touching: exit need not wait
   std::thread thread_;
 };
 

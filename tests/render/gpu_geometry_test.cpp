@@ -653,6 +653,44 @@ TEST(TileSlots, AnnouncesTheNextGrowthBeforeItComes) {
   EXPECT_EQ(gl_error(), "");
 }
 
+// Tiles found resident count as the frame's pins too; a growth past what
+// the budget holds is not announced.
+TEST(TileSlots, AnnouncesOnFoundTilesAndNotPastTheBudget) {
+  gl();
+  const uint64_t n = TileSlots::kFirstLayers, tile = 4 * 4 * (4 + 4);
+  TileSlots slots(2 * n * tile + tile, 4096);  // 2n layers and one more
+  std::vector<uint64_t> announced;
+  slots.set_on_growth_ahead([&](uint64_t bytes) { announced.push_back(bytes); });
+  gl::Uploads uploads;
+  const std::vector<float> pixels(16, 1.0f);
+  auto insert = [&](uint64_t x) {
+    return slots.insert(TextureKey{TileKey{12, static_cast<uint32_t>(x), 0}, false}, 4, 4,
+                        pixels.data(), uploads);
+  };
+  auto find = [&](uint64_t x) {
+    return slots.find(TextureKey{TileKey{12, static_cast<uint32_t>(x), 0}, false});
+  };
+  const uint64_t third = 3 * n / 8;  // pins that announce
+  slots.begin_frame();
+  for (uint64_t x = 0; x + 1 < third; ++x) ASSERT_TRUE(insert(x));
+  EXPECT_TRUE(announced.empty());
+  slots.begin_frame();
+  ASSERT_TRUE(insert(third - 1));
+  for (uint64_t x = 0; x + 2 < third; ++x) ASSERT_TRUE(find(x));
+  EXPECT_TRUE(announced.empty());
+  ASSERT_TRUE(find(third - 2));  // the frame's 3/8th pin, found
+  EXPECT_EQ(announced, (std::vector<uint64_t>{2 * n * 64, 2 * n * 64}));
+  // A frame of new tiles grows the array to 2n; pinning 3/8 of that, the
+  // next growth would be past the budget: not announced.
+  announced.clear();
+  slots.begin_frame();
+  for (uint64_t x = 1000; x <= 1000 + n; ++x) ASSERT_TRUE(insert(x));
+  EXPECT_EQ(slots.heights().layers(), static_cast<int>(2 * n));
+  EXPECT_GE(8 * slots.pinned(false), static_cast<int>(3 * 2 * n));
+  EXPECT_TRUE(announced.empty());
+  EXPECT_EQ(gl_error(), "");
+}
+
 // Composites (written on the GPU, costly to remake) are kept: their array
 // grows, up to what the budget holds, rather than reuse a layer.
 TEST(TileSlots, CompositesGrowTheArrayRatherThanGiveUpALayer) {

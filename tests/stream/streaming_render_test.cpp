@@ -335,8 +335,9 @@ TEST_F(StreamingRenderTest, BudgetsHoldAlongALongPath) {
 // Frame after frame the render thread reuses memory it already has
 // (apps/relief/allocator.h): once a still view is complete, its frames take
 // no page fault (each costs ~10 us per 4 KiB page on this project's virtual
-// machines). jemalloc builds only: a sanitizer's allocator keeps freed memory
-// in quarantine, on purpose.
+// machines; without the kept memory these frames took 280). Two are allowed
+// for a code page read in again under a busy test run. jemalloc builds
+// only: a sanitizer's allocator keeps freed memory in quarantine, on purpose.
 TEST_F(StreamingRenderTest, ACompleteStillViewsFramesTakeNoPageFaults) {
   const json s = render_path("no-faults",
                              fmt::format("{{\"time\": 0, \"camera\": {}}}, "
@@ -355,7 +356,7 @@ TEST_F(StreamingRenderTest, ACompleteStillViewsFramesTakeNoPageFaults) {
   }
   EXPECT_GT(complete, 20u);
   if (allocator.starts_with("jemalloc")) {
-    EXPECT_EQ(faults, 0u);
+    EXPECT_LE(faults, 2u);
   }
 }
 

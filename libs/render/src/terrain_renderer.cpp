@@ -208,10 +208,11 @@ class GlTerrainRenderer final : public TerrainRenderer {
   }
 
   // llvmpipe compiles a program's machine code for the GL state of its first
-  // draw (25-100 ms here): one draw now, of a triangle that covers nothing,
-  // with the state and texture formats of the frames, so that the first frame
-  // of a view or a flight does not stall on it. The buffers it writes are
-  // rewritten by the first frame.
+  // draw (12 ms and more here): one draw now, of a triangle that covers
+  // nothing, with the frames' state and the elevation's texture formats, so
+  // that the first frame of a view or a flight does not stall on it (a later
+  // state, e.g. the first composites' array, may still compile once). The
+  // buffers it writes are rewritten by the first frame.
   Status warm_up() {
     auto target = RELIEF_TRY(make_offscreen_target(1, 1));
     records_.assign(1, QuadRecord{});

@@ -27,6 +27,7 @@ std::optional<int> TileSlots::find(const TextureKey& key) {
   if (it->second.frame != frame_) ++pool(key.imagery).pinned;
   it->second.frame = frame_;
   order_.splice(order_.begin(), order_, it->second.position);
+  announce_growth_ahead(key.imagery, false);  // a frame of resident tiles pins them here
   return it->second.layer;
 }
 
@@ -67,7 +68,9 @@ void TileSlots::announce_growth_ahead(bool imagery, bool composite) {
   announced = layers;
   const uint64_t bytes = p.array.layer_bytes() + (imagery ? 0 : slopes_.layer_bytes());
   const int next = next_layers(layers, bytes);
-  if (next <= layers) return;
+  // Not a growth past what the budget holds: only a frame that needs more
+  // makes one, and memory faulted in for it would mostly wait in vain.
+  if (next < 2 * layers) return;
   on_growth_ahead_(static_cast<uint64_t>(next) * p.array.layer_bytes());
   if (!imagery) on_growth_ahead_(static_cast<uint64_t>(next) * slopes_.layer_bytes());
 }

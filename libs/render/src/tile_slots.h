@@ -68,12 +68,12 @@ class TileSlots {
 
   // Called with the bytes an array's next growth will allocate (for heights
   // then for their slopes' array), once per size, when it draws near: a
-  // frame pins 3/8 of the layers of an array of uploaded tiles, or 3/4 of
-  // a composites' array are in use. On llvmpipe here nearly all of a
-  // growth's time (0.57-0.69 s for 128 -> 256 layers of 530 x 274 imagery,
-  // in one frame) is the new array's fresh memory being faulted in: the
-  // caller can make that memory ready off the render thread (the relief
-  // executable does, apps/relief/allocator.h).
+  // frame pins 3/8 of the layers of an array of uploaded tiles (found or
+  // inserted), or 3/4 of a composites' array are in use. Not for a growth
+  // past what the budget holds (only a frame that needs it makes one). On llvmpipe here nearly all
+  // of a growth's time (0.57-0.69 s for 128 -> 256 layers of 530 x 274 imagery, in one frame) is
+  // the new array's fresh memory being faulted in: the caller can make that memory ready off the
+  // render thread (the relief executable does, apps/relief/allocator.h).
   void set_on_growth_ahead(std::function<void(uint64_t bytes)> f) {
     on_growth_ahead_ = std::move(f);
   }

@@ -239,15 +239,6 @@ Result<std::unique_ptr<Window>> Window::create(const WindowOptions& options) {
   int width = 0, height = 0;
   glfwGetFramebufferSize(impl->window, &width, &height);
   RELIEF_CHECK(impl->target.resize(std::max(width, 1), std::max(height, 1)));
-  // The first copy to the screen and the first swap cost 35-90 ms on this
-  // project's machines (llvmpipe compiles the copy's shaders; the X server's
-  // side of the window is set up): both once now, with a black frame,
-  // instead of in the first frames. Not counted in swaps().
-  impl->target.bind();
-  glClearColor(0, 0, 0, 1);
-  glClear(GL_COLOR_BUFFER_BIT);
-  copy_to_screen(impl->target, width, height);
-  glfwSwapBuffers(impl->window);
 
   IMGUI_CHECKVERSION();
   ImGui::CreateContext();
@@ -269,6 +260,16 @@ Result<std::unique_ptr<Window>> Window::create(const WindowOptions& options) {
   std::unique_ptr<Window> w(new Window(std::move(impl)));
   w->impl_->owner = w.get();
   w->set_vsync(options.vsync);
+  // The first copy to the screen and the first swap cost 35-90 ms on this
+  // project's machines (llvmpipe compiles the copy's shaders; the X server's
+  // side of the window is set up): both once now, with a black frame,
+  // instead of in the first frames. Not counted in swaps().
+  render::RenderTarget& target = w->impl_->target;
+  target.bind();
+  glClearColor(0, 0, 0, 1);
+  glClear(GL_COLOR_BUFFER_BIT);
+  copy_to_screen(target, width, height);
+  glfwSwapBuffers(w->impl_->window);
   return w;
 }
 
