@@ -60,6 +60,10 @@ constexpr uint64_t kFrameHeapBytes = uint64_t{64} << 20;
 // bench/view's Himalaya flight, nearly all of it the fresh pages.
 void prefault_in_background(uint64_t bytes);
 
+// Writes one byte in every page of `bytes` at `p`, so that the kernel maps
+// them all now (for the two functions above).
+void touch_pages(void* p, uint64_t bytes);
+
 // "; N MiB of heap faulted in" after prefault_frame_heap(), else "" (for
 // allocator_description()).
 std::string prefault_note();

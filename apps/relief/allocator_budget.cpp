@@ -23,6 +23,11 @@ std::string prefault_note() {
   return "; " + std::to_string(prefaulted >> 20) + " MiB of heap faulted in";
 }
 
+void touch_pages(void* p, uint64_t bytes) {
+  auto* page = static_cast<volatile char*>(p);  // volatile: the stores happen
+  for (uint64_t i = 0; i < bytes; i += 4096) page[i] = 0;
+}
+
 void prefault_frame_heap(uint64_t bytes) {
   // Blocks of 1 MiB: jemalloc serves a request from a free block at most 64
   // times its size, so larger blocks would be left to the few large requests
@@ -32,8 +37,7 @@ void prefault_frame_heap(uint64_t bytes) {
   for (uint64_t done = 0; done < bytes; done += kBlock) {
     void* p = std::malloc(kBlock);
     if (!p) break;
-    auto* page = static_cast<volatile char*>(p);  // volatile: the stores happen
-    for (size_t i = 0; i < kBlock; i += 4096) page[i] = 0;
+    touch_pages(p, kBlock);
     blocks.push_back(p);
   }
   for (void* p : blocks) std::free(p);

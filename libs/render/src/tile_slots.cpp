@@ -47,6 +47,10 @@ bool TileSlots::evict_one(std::optional<bool> imagery) {
   return false;
 }
 
+uint64_t TileSlots::layer_bytes(bool imagery) const {
+  return imagery ? imagery_.layer_bytes() : heights_.layer_bytes() + slopes_.layer_bytes();
+}
+
 int TileSlots::next_layers(int old, uint64_t layer_bytes) const {
   // Double, but not past what the budget holds unless the frame needs it.
   const int fits =
@@ -66,8 +70,7 @@ void TileSlots::announce_growth_ahead(bool imagery, bool composite) {
   const int in_use = layers - static_cast<int>(p.free.size());
   if (composite ? 4 * in_use < 3 * layers : 8 * p.pinned < 3 * layers) return;
   announced = layers;
-  const uint64_t bytes = p.array.layer_bytes() + (imagery ? 0 : slopes_.layer_bytes());
-  const int next = next_layers(layers, bytes);
+  const int next = next_layers(layers, layer_bytes(imagery));
   // Not a growth past what the budget holds: only a frame that needs more
   // makes one, and memory faulted in for it would mostly wait in vain.
   if (next < 2 * layers) return;
@@ -89,7 +92,7 @@ void TileSlots::allocate(bool imagery, int width, int height) {
   if (p.array.sized()) return;
   p.array.set_layer_size(width, height);
   if (!imagery) slopes_.set_layer_size(width, height);
-  grow(imagery, p.array.layer_bytes() + (imagery ? 0 : slopes_.layer_bytes()));
+  grow(imagery, layer_bytes(imagery));
 }
 
 Result<int> TileSlots::insert(const TextureKey& key, int width, int height, const void* pixels,
@@ -101,7 +104,7 @@ Result<int> TileSlots::insert(const TextureKey& key, int width, int height, cons
                             width, height, p.array.width(), p.array.height()));
   }
   if (!key.imagery && !slopes_.sized()) slopes_.set_layer_size(width, height);
-  const uint64_t bytes = p.array.layer_bytes() + (key.imagery ? 0 : slopes_.layer_bytes());
+  const uint64_t bytes = layer_bytes(key.imagery);
   while (used_ + bytes > budget_ && evict_one(std::nullopt)) {
   }
   if (p.free.empty() && p.array.layers() >= max_layers_ && !evict_one(key.imagery)) {

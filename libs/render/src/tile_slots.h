@@ -70,9 +70,10 @@ class TileSlots {
   // then for their slopes' array), once per size, when it draws near: a
   // frame pins 3/8 of the layers of an array of uploaded tiles (found or
   // inserted), or 3/4 of a composites' array are in use. Not for a growth
-  // past what the budget holds (only a frame that needs it makes one). On llvmpipe here nearly all
-  // of a growth's time (0.57-0.69 s for 128 -> 256 layers of 530 x 274 imagery, in one frame) is
-  // the new array's fresh memory being faulted in: the caller can make that memory ready off the
+  // past what the budget holds (only a frame that needs it makes one). On
+  // llvmpipe here nearly all of a growth's time (0.57-0.69 s for 128 -> 256
+  // layers of 530 x 274 imagery, in one frame) is the new array's fresh
+  // memory being faulted in: the caller can make that memory ready off the
   // render thread (the relief executable does, apps/relief/allocator.h).
   void set_on_growth_ahead(std::function<void(uint64_t bytes)> f) {
     on_growth_ahead_ = std::move(f);
@@ -119,12 +120,14 @@ class TileSlots {
     return imagery ? Pool{imagery_, free_imagery_, pinned_imagery_}
                    : Pool{heights_, free_heights_, pinned_heights_};
   }
+  // Bytes of one layer of a kind: imagery, or heights with their slopes.
+  uint64_t layer_bytes(bool imagery) const;
   // Layers an array of `old` layers grows to: the first kFirstLayers, then
   // doubling within the budget (`layer_bytes`: of the kind's arrays).
   int next_layers(int old, uint64_t layer_bytes) const;
   // Adds layers to a kind's array (next_layers()), all free.
   void grow(bool imagery, uint64_t layer_bytes);
-  // set_on_growth_ahead()'s call, after an insert().
+  // set_on_growth_ahead()'s call, after a tile is pinned (found or inserted).
   void announce_growth_ahead(bool imagery, bool composite);
   // Evicts the least recently used unpinned tile (of one kind, if given).
   bool evict_one(std::optional<bool> imagery);
