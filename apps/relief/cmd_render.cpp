@@ -76,6 +76,8 @@ options:
   --cache-size SIZE  budget of that disk cache (L1, default 1GiB)
   --loader-nice N    run the tile loaders N nice levels below the render thread
                      (0-19, default 0; docs/streaming.md "In flight")
+  --refine-threads N threads that refine a frame's edge marks (the same mesh;
+                     0, the default: one per core; 1: the render thread only)
   --simulate-latency MS    add MS milliseconds to every store request
   --simulate-bandwidth MBIT  share MBIT Mbit/s among all store requests
 path options:

@@ -78,7 +78,7 @@ options:
                      draws this one, and swaps it: docs/viewer.md, "Overlap")
   --no-vsync         do not wait for the display's refresh
   --fov, --exaggeration, --lod, --sky, --gpu-budget, --cache, --cache-size,
-  --loader-nice
+  --loader-nice, --refine-threads
                      as relief render
 %TEXTURE%)";
 

@@ -88,7 +88,7 @@ std::vector<OptionSpec> with_scene_options(std::vector<OptionSpec> own) {
   for (const char* name :
        {"--imagery", "--detect-level", "--detect-sensitivity", "--elevation", "--fuse", "--weights",
         "--camera", "--look-at", "--size", "--fov", "--pixel-error", "--exaggeration", "--lod",
-        "--sky", "--gpu-budget", "--cache", "--cache-size", "--loader-nice"}) {
+        "--sky", "--gpu-budget", "--cache", "--cache-size", "--loader-nice", "--refine-threads"}) {
     own.emplace_back(name);
   }
   own.emplace_back("--detect", "", false);
@@ -131,6 +131,9 @@ Result<RenderSetup> parse_render_setup(const Args& args, TextureLayers textures,
   }
   if (auto level = RELIEF_TRY(args.get_int("--mesh-level", 0, 8))) s.mesh_level = *level;
   if (auto nice = RELIEF_TRY(args.get_int("--loader-nice", 0, 19))) s.loader_nice = *nice;
+  if (auto threads = RELIEF_TRY(args.get_int("--refine-threads", 0, 64))) {
+    s.refine_threads = static_cast<unsigned>(*threads);
+  }
   if (auto lod = args.get("--lod")) {
     if (*lod == "quads") {
       s.lod_mode = lod::LodMode::quads;
@@ -209,6 +212,7 @@ view::SceneOptions scene_options(const RenderSetup& setup) {
   so.mesh_level = setup.mesh_level;
   so.selection.mode = setup.lod_mode;
   so.refine_variant = setup.refine_variant;
+  so.refine_threads = setup.refine_threads;
   so.gpu_budget = setup.gpu_budget;
   so.loader.worker_nice = setup.loader_nice;
   so.render.exaggeration = static_cast<float>(setup.exaggeration);

@@ -8,7 +8,8 @@
 // RefineHistory, as view::Scene does. A first pass over the path measures
 // every tile's diamond errors (so the timed pass measures none inline); the
 // timed pass then starts from an empty history. SECONDS: only the path's
-// first seconds. Prints per-frame refinement
+// first seconds. THREADS=N: refined in N lanes on a pool of N threads
+// (RefineOptions::executor; the same meshes, so the same hash). Prints per-frame refinement
 // wall and CPU time (median, mean, p90), marks evaluated and triangles in
 // total, and a hash of every frame's index buffer: two builds that print the
 // same hash drew the same meshes.
@@ -19,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "relief/base/parallel.h"
 #include "relief/lod/camera_path.h"
 #include "relief/lod/refine.h"
 #include "relief/lod/selection.h"
@@ -43,7 +45,7 @@ struct Totals {
 
 Status fly(const std::vector<lod::Keyframe>& path, double fps, double end, double pixels,
            lod::TerrainModel& terrain, lod::RefineCache& cache, lod::RefineHistory* history,
-           Totals& totals, bool verbose) {
+           Executor* executor, Totals& totals, bool verbose) {
   lod::SelectionOptions so;
   so.pixel_error = pixels;
   so.mode = lod::LodMode::edge_marks;
@@ -57,6 +59,7 @@ Status fly(const std::vector<lod::Keyframe>& path, double fps, double end, doubl
     ro.pixel_error = pixels;
     ro.cache = &cache;
     ro.history = history;
+    ro.executor = executor;
     const lod::RefinedMesh mesh = RELIEF_TRY(lod::refine(view, terrain, selection, ro));
     totals.wall_ms.push_back(mesh.stats.seconds * 1e3);
     totals.cpu_ms.push_back(mesh.stats.cpu_seconds * 1e3);
@@ -96,6 +99,9 @@ int main(int argc, char** argv) {
   const char* env_history = std::getenv("HISTORY");
   const bool use_history = !env_history || std::string(env_history) != "0";
   const bool verbose = std::getenv("VERBOSE") != nullptr;
+  const char* env_threads = std::getenv("THREADS");
+  PooledExecutor pool(env_threads ? static_cast<unsigned>(std::atoi(env_threads)) : 1u);
+  Executor* executor = pool.concurrency() > 1 ? &pool : nullptr;
   auto store = tiles::Store::open(argv[1]);
   if (!store) {
     std::fprintf(stderr, "%s\n", store.error().message.c_str());
@@ -121,12 +127,13 @@ int main(int argc, char** argv) {
   const double end = std::min(seconds, keyframes.back().time);
   Totals warm, timed;
   lod::RefineHistory history;
-  if (auto s = fly(keyframes, fps, end, pixels, terrain, cache, nullptr, warm, false); !s) {
+  if (auto s = fly(keyframes, fps, end, pixels, terrain, cache, nullptr, executor, warm, false);
+      !s) {
     std::fprintf(stderr, "%s\n", s.error().message.c_str());
     return 1;
   }
   if (auto s = fly(keyframes, fps, end, pixels, terrain, cache, use_history ? &history : nullptr,
-                   timed, verbose);
+                   executor, timed, verbose);
       !s) {
     std::fprintf(stderr, "%s\n", s.error().message.c_str());
     return 1;

@@ -2,13 +2,13 @@
 // and with the brute-force full-resolution mesh (every finest sample a
 // vertex), side by side: quads, triangles, draw calls, LOD selection CPU time
 // (cold: first frame, tiles loaded and errors measured; warm: median of 5
-// later frames), GPU frame time (draw calls to glFinish, median of 3 after a
-// warm-up draw, for both meshes), the selection's screen-space error bound
-// (its estimate of the largest error) and the error measured on random finest
-// samples (lod/measured_error.h), triangles per screen pixel. VIEWS names the fixed
-// views (pyrenees: the bundled SRTM pair; himalaya: the 4 x 6 degree SRTM3
-// block of ../shared/data/dem/srtm3-h44). With a third argument, the rows are
-// also appended to that file as a markdown table.
+// later frames; edge marks also refined in lanes on one thread per core,
+// RefineOptions::executor, the same mesh), GPU frame time (draw calls to glFinish, median of 3
+// after a warm-up draw, for both meshes), the selection's screen-space error bound (its estimate of
+// the largest error) and the error measured on random finest samples (lod/measured_error.h),
+// triangles per screen pixel. VIEWS names the fixed views (pyrenees: the bundled SRTM pair;
+// himalaya: the 4 x 6 degree SRTM3 block of ../shared/data/dem/srtm3-h44). With a third argument,
+// the rows are also appended to that file as a markdown table.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -17,6 +17,9 @@
 #include <string>
 #include <vector>
 
+#include <fmt/format.h>
+
+#include "relief/base/parallel.h"
 #include "relief/lod/measured_error.h"
 #include "relief/lod/refine.h"
 #include "relief/lod/selection.h"
@@ -41,7 +44,8 @@ struct Measure {
   uint32_t quads = 0, draw_calls = 0;
   uint64_t triangles = 0;
   double cold_ms = 0, warm_ms = 0, gpu_ms = 0, error_bound = 0, measured_error = 0;
-  size_t error_samples = 0;  // of the measured error: finest samples compared on screen
+  double warm_lanes_ms = NAN;  // edge marks: warm, refined in lanes
+  size_t error_samples = 0;    // of the measured error: finest samples compared on screen
 };
 
 constexpr int kWarmSelections = 5;
@@ -61,7 +65,7 @@ struct Frame {
 };
 
 Result<Frame> select_frame(const lod::View& view, lod::TerrainModel& terrain, Mesh mesh,
-                           lod::RefineCache& cache) {
+                           lod::RefineCache& cache, Executor* lanes = nullptr) {
   lod::SelectionOptions o;
   o.pixel_error = 1;
   o.full_resolution = mesh == Mesh::brute_force;
@@ -74,6 +78,7 @@ Result<Frame> select_frame(const lod::View& view, lod::TerrainModel& terrain, Me
     lod::RefineOptions ro;
     ro.pixel_error = 1;
     ro.cache = &cache;
+    ro.executor = lanes;
     f.refined = RELIEF_TRY(lod::refine(view, terrain, f.selection, ro));
     f.seconds += f.refined->stats.seconds;
   }
@@ -93,6 +98,18 @@ Result<Measure> measure(const tiles::Store& store, const lod::View& view, Mesh m
     warm.push_back(RELIEF_TRY(select_frame(view, terrain, mesh, cache)).seconds * 1e3);
   }
   m.warm_ms = median(warm);
+  if (mesh == Mesh::edge_marks) {
+    PooledExecutor lanes;
+    warm.clear();
+    for (int r = 0; r < kWarmSelections; ++r) {
+      const Frame f = RELIEF_TRY(select_frame(view, terrain, mesh, cache, &lanes));
+      if (f.refined->indices != first.refined->indices) {
+        return fail("refinement in lanes made another mesh");
+      }
+      warm.push_back(f.seconds * 1e3);
+    }
+    m.warm_lanes_ms = median(warm);
+  }
   m.quads = first.selection.stats.quads;
   m.error_bound = first.selection.stats.max_error_pixels;
   const lod::RefinedMesh* refined = first.refined ? &*first.refined : nullptr;
@@ -173,9 +190,10 @@ int main(int argc, char** argv) {
       {"straight down from 900 km", {81, 30, 900e3, 0, -90, 0, 60, 1280, 720}},
   };
   const std::vector<ViewCase>& views = view_set == "himalaya" ? himalaya : pyrenees;
-  std::printf("%-27s %-6s %8s %11s %7s %6s %10s %10s %9s %8s %11s\n", "view", "mesh", "quads",
-              "triangles", "tri/px", "draws", "select ms", "(cold ms)", "gpu ms", "bound px",
-              "measured px");
+  const unsigned cores = PooledExecutor().concurrency();
+  std::printf("%-27s %-6s %8s %11s %7s %6s %10s %10s %10s %9s %8s %11s\n", "view", "mesh", "quads",
+              "triangles", "tri/px", "draws", "select ms", fmt::format("{} thr ms", cores).c_str(),
+              "(cold ms)", "gpu ms", "bound px", "measured px");
   for (const ViewCase& v : views) {
     auto view = lod::make_view(v.camera);
     if (!view) {
@@ -193,25 +211,28 @@ int main(int argc, char** argv) {
     const double pixels = double(view->width) * view->height;
     for (const auto& [label, m] :
          {std::pair{"edges", *edge_m}, std::pair{"quads", *lod_m}, std::pair{"full", *full_m}}) {
-      std::printf("%-27s %-6s %8u %11llu %7.2f %6u %10.2f %10.1f %9.1f %8.2f %11.2f\n", v.name,
-                  label, m.quads, static_cast<unsigned long long>(m.triangles),
-                  double(m.triangles) / pixels, m.draw_calls, m.warm_ms, m.cold_ms, m.gpu_ms,
-                  m.error_bound, m.measured_error);
+      std::printf("%-27s %-6s %8u %11llu %7.2f %6u %10.2f %10.2f %10.1f %9.1f %8.2f %11.2f\n",
+                  v.name, label, m.quads, static_cast<unsigned long long>(m.triangles),
+                  double(m.triangles) / pixels, m.draw_calls, m.warm_ms, m.warm_lanes_ms, m.cold_ms,
+                  m.gpu_ms, m.error_bound, m.measured_error);
     }
     if (markdown) {
       for (const auto& [label, m] :
            {std::pair{"edge marks", *edge_m}, std::pair{"quads", *lod_m}}) {
-        std::fprintf(markdown,
-                     "| %s | %s | %u | %llu | %.2f | %u | %.2f ms | %.1f ms | %.1f ms | %.2f px | "
-                     "%.2f px (%zu samples) |\n",
-                     label == std::string("edge marks") ? v.name : "", label, m.quads,
-                     static_cast<unsigned long long>(m.triangles), double(m.triangles) / pixels,
-                     m.draw_calls, m.warm_ms, m.cold_ms, m.gpu_ms, m.error_bound, m.measured_error,
-                     m.error_samples);
+        const std::string lanes =
+            std::isnan(m.warm_lanes_ms) ? std::string() : fmt::format("{:.2f} ms", m.warm_lanes_ms);
+        std::fprintf(
+            markdown,
+            "| %s | %s | %u | %llu | %.2f | %u | %.2f ms | %s | %.1f ms | %.1f ms | %.2f px "
+            "| %.2f px (%zu samples) |\n",
+            label == std::string("edge marks") ? v.name : "", label, m.quads,
+            static_cast<unsigned long long>(m.triangles), double(m.triangles) / pixels,
+            m.draw_calls, m.warm_ms, lanes.c_str(), m.cold_ms, m.gpu_ms, m.error_bound,
+            m.measured_error, m.error_samples);
       }
       const std::string gpu =
           std::isnan(full_m->gpu_ms) ? std::string("not drawn") : fmt_ms(full_m->gpu_ms);
-      std::fprintf(markdown, "| | brute force | %u | %llu | %.2f | %u | | | %s | | |\n",
+      std::fprintf(markdown, "| | brute force | %u | %llu | %.2f | %u | | | | %s | | |\n",
                    full_m->quads, static_cast<unsigned long long>(full_m->triangles),
                    double(full_m->triangles) / pixels, full_m->draw_calls, gpu.c_str());
     }

@@ -2,6 +2,7 @@
 // error naming the argument, before rendering or writing anything.
 #include <gtest/gtest.h>
 
+#include "relief/base/file_io.h"
 #include "test_support.h"
 
 namespace relief::testing {
@@ -55,6 +56,9 @@ TEST_F(RenderArgs, ImpossibleCameraValuesNameTheArgument) {
       {{"--camera", "1.5,42.5,5000,0,-30,0", "--size", "100000x100000"}, "--size"},
       {{"--camera", "1.5,42.5,5000,0,-30,0", "--loader-nice", "20"}, "--loader-nice"},
       {{"--camera", "1.5,42.5,5000,0,-30,0", "--loader-nice", "-1"}, "--loader-nice"},
+      {{"--camera", "1.5,42.5,5000,0,-30,0", "--refine-threads", "65"}, "--refine-threads"},
+      {{"--camera", "1.5,42.5,5000,0,-30,0", "--refine-threads", "-1"}, "--refine-threads"},
+      {{"--camera", "1.5,42.5,5000,0,-30,0", "--refine-threads", "two"}, "--refine-threads"},
   };
   for (const auto& c : cases) {
     std::vector<std::string> args = {"render", store_, "-o", out};
@@ -65,6 +69,23 @@ TEST_F(RenderArgs, ImpossibleCameraValuesNameTheArgument) {
         << c.args.front() << " " << c.args[1] << ": exit " << r.exit_code << ", " << r.err;
   }
   EXPECT_FALSE(fs::exists(out));
+}
+
+// The refinement in lanes makes the mesh of one thread: the same image.
+TEST_F(RenderArgs, RefineThreadsDrawTheSameImage) {
+  std::vector<std::vector<std::byte>> images;
+  for (const char* threads : {"1", "3"}) {
+    const std::string out = (dir_->path() / (std::string("threads-") + threads + ".png")).string();
+    auto r = run_relief({"render", store_, "-o", out, "--look-at", "1.5,42.5,1500,30000,20,-35",
+                         "--size", "320x240", "--refine-threads", threads},
+                        kNoMesaLeakReport);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    auto bytes = read_file(out);
+    ASSERT_TRUE(bytes) << bytes.error().message;
+    images.push_back(std::move(*bytes));
+  }
+  ASSERT_GT(images[0].size(), 1000u);
+  EXPECT_EQ(images[0], images[1]);
 }
 
 }  // namespace

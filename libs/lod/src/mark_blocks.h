@@ -24,36 +24,13 @@ namespace relief::lod {
 // caches); by slot, a class's marks lie together. Only diamonds have slots:
 // the halves' corners (always vertices) and samples' sides (never split) have
 // no mark.
-class SlotMarks {
+// Zeroed blocks of marks, kept for the next frame once allocated. One per
+// thread that writes marks (refine.cpp's lanes each have their own).
+class MarkBlocks {
  public:
-  void reset(const MarkGrid& grid, size_t quads) {
-    per_quad_ = (grid.slots() + kBlockBytes - 1) / kBlockBytes;
-    table_.assign(quads * per_quad_, nullptr);
-    used_ = 0;
-  }
+  static constexpr uint32_t kBlockBytes = 256;
 
-  uint8_t get(int q, uint32_t slot) const {
-    const uint8_t* b = table_[block(q, slot)];
-    return b ? b[slot % kBlockBytes] : uint8_t{0};
-  }
-
-  uint8_t& at(int q, uint32_t slot) {
-    uint8_t*& b = table_[block(q, slot)];
-    if (!b) b = allocate();
-    return b[slot % kBlockBytes];
-  }
-
-  // A mark about to be read (if its block is there).
-  void prefetch(int q, uint32_t slot) const {
-    if (const uint8_t* b = table_[block(q, slot)]) __builtin_prefetch(b + slot % kBlockBytes);
-  }
-
- private:
-  static constexpr uint32_t kBlockBytes = 256, kChunkBlocks = 256;
-
-  size_t block(int q, uint32_t slot) const {
-    return static_cast<size_t>(q) * per_quad_ + slot / kBlockBytes;
-  }
+  void reset() { used_ = 0; }
   uint8_t* allocate() {
     const uint32_t b = used_++;
     if (b / kChunkBlocks == chunks_.size()) {
@@ -64,10 +41,49 @@ class SlotMarks {
     return block;
   }
 
-  size_t per_quad_ = 0;
-  std::vector<uint8_t*> table_;  // per quad and block: the block, or null
+ private:
+  static constexpr uint32_t kChunkBlocks = 256;
   std::vector<std::unique_ptr<uint8_t[]>> chunks_;
   uint32_t used_ = 0;
+};
+
+class SlotMarks {
+ public:
+  void reset(const MarkGrid& grid, size_t quads) {
+    per_quad_ = (grid.slots() + kBlockBytes - 1) / kBlockBytes;
+    table_.assign(quads * per_quad_, nullptr);
+    blocks_.reset();
+  }
+
+  uint8_t get(int q, uint32_t slot) const {
+    const uint8_t* b = table_[block(q, slot)];
+    return b ? b[slot % kBlockBytes] : uint8_t{0};
+  }
+
+  // A mark to write, its block taken from `blocks` if it has none yet. Threads
+  // may write the marks of different quads at once, each with its own blocks.
+  uint8_t& at(int q, uint32_t slot, MarkBlocks& blocks) {
+    uint8_t*& b = table_[block(q, slot)];
+    if (!b) b = blocks.allocate();
+    return b[slot % kBlockBytes];
+  }
+  uint8_t& at(int q, uint32_t slot) { return at(q, slot, blocks_); }
+
+  // A mark about to be read (if its block is there).
+  void prefetch(int q, uint32_t slot) const {
+    if (const uint8_t* b = table_[block(q, slot)]) __builtin_prefetch(b + slot % kBlockBytes);
+  }
+
+ private:
+  static constexpr uint32_t kBlockBytes = MarkBlocks::kBlockBytes;
+
+  size_t block(int q, uint32_t slot) const {
+    return static_cast<size_t>(q) * per_quad_ + slot / kBlockBytes;
+  }
+
+  size_t per_quad_ = 0;
+  std::vector<uint8_t*> table_;  // per quad and block: the block, or null
+  MarkBlocks blocks_;
 };
 
 }  // namespace relief::lod

@@ -1,6 +1,7 @@
 #include "relief/lod/refine.h"
 
 #include <algorithm>
+#include <atomic>
 #include <bit>
 #include <cassert>
 #include <chrono>
@@ -10,6 +11,7 @@
 #include <list>
 #include <mutex>
 #include <optional>
+#include <thread>
 #include <unordered_map>
 
 #include <fmt/format.h>
@@ -371,6 +373,8 @@ constexpr double kMinBudget = 1.0 / 16, kMaxBudget = 4;
 // Views kept: a block decided longer ago is decided again.
 constexpr size_t kViews = 64;
 constexpr uint32_t kIdle = 2, kProbe = 4;
+// Lanes of a parallel top-down refinement (Lanes::owner is a byte).
+constexpr size_t kMaxLanes = 64;
 // Top-down: diamonds decided ahead of the one whose data is fetched.
 constexpr size_t kAhead = 8;
 // Margins kept against rounding: relative on bounds and distances (their
@@ -450,11 +454,24 @@ struct Located {
   GridPoint p;
 };
 
+// Top-down refinement on several threads ("Lanes", below): each quad is
+// refined by one lane, which alone writes its marks and records; a split a
+// lane forces across a side into another lane's quad goes to that lane's inbox.
+struct Lanes {
+  std::vector<uint8_t> owner;  // per quad: its lane
+  struct Inbox {
+    std::mutex mutex;
+    std::vector<Located> splits;
+    std::atomic<bool> any{false};  // a hint to look without locking
+  };
+  std::vector<std::unique_ptr<Inbox>> inboxes;  // per lane
+};
+
 class Refiner {
  public:
   Refiner(const View& view, TerrainModel& terrain, const Selection& selection,
           const RefineOptions& options, RefineCache::Impl& cache, SlotMarks& marks,
-          StepTables& steps)
+          StepTables& steps, std::vector<Quad>& quads)
       : view_(view),
         terrain_(terrain),
         selection_(selection),
@@ -463,6 +480,7 @@ class Refiner {
         marks_(marks),
         steps_(steps),
         grid_(grid_of(terrain)),
+        quads_(quads),
         top_down_(options.variant == RefineVariant::kTopDown),
         history_(options.history ? &options.history->impl() : nullptr),
         corner_(view.tan_half_x * view.tan_half_x + view.tan_half_y * view.tan_half_y),
@@ -514,6 +532,12 @@ class Refiner {
   bool reuse_all() const { return reuse_all_; }
 
   void top_down() {
+    seed_top_down();
+    run_generations();
+  }
+
+  // The first diamonds of every quad (their children come by splits).
+  void seed_top_down() {
     const int32_t n = grid_.n();
     for (size_t i = 0; i < quads_.size(); ++i) {
       for (const GridPoint p : {GridPoint{n / 2, 0}, GridPoint{3 * n / 2, 0}, GridPoint{n / 2, n},
@@ -522,6 +546,9 @@ class Refiner {
         work_.push_back({static_cast<int>(i), p});
       }
     }
+  }
+
+  void run_generations() {
     // Split children of splits made while preparing are in work_ already.
     // Generation by generation (the children of this one's splits go to
     // the next): the final marks do not depend on the order (a child's
@@ -536,7 +563,60 @@ class Refiner {
         decide(generation_[i].quad, generation_[i].p);
       }
       generation_.clear();
+      if (lanes_) {
+        send_splits();
+        take_splits();
+      }
     }
+  }
+
+  // Lanes: a copy of this refiner (after prepare() and seed_top_down()) that
+  // refines the quads `lanes` gives lane `lane`, with its own mark blocks,
+  // starting from their seeds.
+  Refiner lane(Lanes& lanes, uint32_t lane, MarkBlocks& blocks) const {
+    Refiner r = *this;
+    r.lanes_ = &lanes;
+    r.lane_ = lane;
+    r.blocks_ = &blocks;
+    r.stats_ = {};
+    r.work_.clear();
+    for (const Located& l : work_) {
+      if (r.mine(l.quad)) r.work_.push_back(l);
+    }
+    r.outbox_.assign(lanes.inboxes.size(), {});
+    return r;
+  }
+
+  // One round of a lane: what its inbox holds and what that splits, until
+  // neither its inbox nor its work has more. Splits sent to other lanes after
+  // their round ended wait for the next round (refine() runs rounds until no
+  // inbox has any): no lane waits for another, so the rounds finish whatever
+  // the executor runs at once.
+  void run_lane() {
+    take_splits();
+    run_generations();
+    send_splits();
+  }
+
+  // This lane's statistics added to those of the refiner it was copied from.
+  void merge(const Refiner& lane) {
+    stats_.marks_evaluated += lane.stats_.marks_evaluated;
+    stats_.max_unresolved_pixels =
+        std::max(stats_.max_unresolved_pixels, lane.stats_.max_unresolved_pixels);
+    unresolved_keys_.insert(unresolved_keys_.end(), lane.unresolved_keys_.begin(),
+                            lane.unresolved_keys_.end());
+    for (const geo::TileKey& k : lane.stats_.split_wanted) {
+      auto& wanted = stats_.split_wanted;
+      if (std::find(wanted.begin(), wanted.end(), k) == wanted.end()) wanted.push_back(k);
+    }
+  }
+
+  // After the lanes merged: a diamond both lanes of a shared side found
+  // stuck is counted once, as by one refiner.
+  void count_unresolved() {
+    std::sort(unresolved_keys_.begin(), unresolved_keys_.end());
+    stats_.unresolved += static_cast<uint64_t>(
+        std::unique(unresolved_keys_.begin(), unresolved_keys_.end()) - unresolved_keys_.begin());
   }
 
   void bottom_up() {
@@ -563,17 +643,54 @@ class Refiner {
     out.indices.reserve(expected + expected / 8);
     out.grid_k = grid_.k();
     out.quads.resize(quads_.size());
-    const int32_t n = grid_.n();
     for (size_t i = 0; i < quads_.size(); ++i) {
       out.quads[i].first_index = static_cast<uint32_t>(out.indices.size());
-      for (int32_t h = 0; h < 2; ++h) {
-        const GridPoint c{h * n + n / 2, n / 2};
-        const GridPoint nw{h * n, 0}, ne{h * n + n, 0}, se{h * n + n, n}, sw{h * n, n};
-        const std::pair<GridPoint, GridPoint> sides[] = {{nw, ne}, {ne, se}, {se, sw}, {sw, nw}};
-        for (const auto& [a, b] : sides) emit(static_cast<int>(i), c, a, b, out.indices);
-      }
+      emit_quad(static_cast<int>(i), out.indices);
       out.quads[i].index_count =
           static_cast<uint32_t>(out.indices.size()) - out.quads[i].first_index;
+    }
+    out.stats = stats_;
+    return out;
+  }
+
+  // The triangles of quad q's marks.
+  void emit_quad(int q, std::vector<uint32_t>& out) {
+    const int32_t n = grid_.n();
+    for (int32_t h = 0; h < 2; ++h) {
+      const GridPoint c{h * n + n / 2, n / 2};
+      const GridPoint nw{h * n, 0}, ne{h * n + n, 0}, se{h * n + n, n}, sw{h * n, n};
+      const std::pair<GridPoint, GridPoint> sides[] = {{nw, ne}, {ne, se}, {se, sw}, {sw, nw}};
+      for (const auto& [a, b] : sides) emit(q, c, a, b, out);
+    }
+  }
+
+  // Lanes: the triangles of this lane's quads into `out`, each quad's
+  // (RefinedQuad relative to `out`) in `quads`.
+  void emit_lane(std::vector<uint32_t>& out, std::vector<RefinedQuad>& quads) {
+    out.clear();
+    for (size_t i = 0; i < quads_.size(); ++i) {
+      if (!mine(static_cast<int>(i))) continue;
+      quads[i].first_index = static_cast<uint32_t>(out.size());
+      emit_quad(static_cast<int>(i), out);
+      quads[i].index_count = static_cast<uint32_t>(out.size()) - quads[i].first_index;
+    }
+  }
+
+  // Lanes: the mesh of the triangles emit_lane() made, in quad order.
+  RefinedMesh gather(const Lanes& lanes, const std::vector<std::vector<uint32_t>>& indices,
+                     const std::vector<RefinedQuad>& at) const {
+    RefinedMesh out;
+    size_t total = 0;
+    for (const RefinedQuad& q : at) total += q.index_count;
+    out.indices.resize(total);
+    out.grid_k = grid_.k();
+    out.quads.resize(quads_.size());
+    uint32_t next = 0;
+    for (size_t i = 0; i < quads_.size(); ++i) {
+      const std::vector<uint32_t>& from = indices[lanes.owner[i]];
+      std::copy_n(from.begin() + at[i].first_index, at[i].index_count, out.indices.begin() + next);
+      out.quads[i] = {next, at[i].index_count};
+      next += at[i].index_count;
     }
     out.stats = stats_;
     return out;
@@ -809,8 +926,43 @@ class Refiner {
     }
   }
 
-  // The mark of a diamond (MarkGrid::splittable, or a root).
-  uint8_t& mark(int q, GridPoint p) { return marks_.at(q, grid_.slot(p)); }
+  // The mark of a diamond (MarkGrid::splittable, or a root), to write.
+  uint8_t& mark(int q, GridPoint p) { return mark_at(q, grid_.slot(p)); }
+  uint8_t& mark_at(int q, uint32_t slot) {
+    assert(mine(q));
+    return blocks_ ? marks_.at(q, slot, *blocks_) : marks_.at(q, slot);
+  }
+
+  // Whether this refiner decides quad q (always, but for a lane).
+  bool mine(int q) const { return !lanes_ || lanes_->owner[static_cast<size_t>(q)] == lane_; }
+
+  // Lanes: the splits forced into other lanes' quads, to their inboxes.
+  void send_splits() {
+    for (size_t t = 0; t < outbox_.size(); ++t) {
+      std::vector<Located>& out = outbox_[t];
+      if (out.empty()) continue;
+      Lanes::Inbox& in = *lanes_->inboxes[t];
+      {
+        std::lock_guard lock(in.mutex);
+        in.splits.insert(in.splits.end(), out.begin(), out.end());
+        in.any.store(true, std::memory_order_release);
+      }
+      out.clear();
+    }
+  }
+
+  // Lanes: the splits other lanes forced into this one's quads, made here.
+  void take_splits() {
+    Lanes::Inbox& in = *lanes_->inboxes[lane_];
+    if (!in.any.load(std::memory_order_acquire)) return;
+    {
+      std::lock_guard lock(in.mutex);
+      received_.swap(in.splits);
+      in.any.store(false, std::memory_order_relaxed);
+    }
+    for (const Located& l : received_) split(l.quad, l.p);
+    received_.clear();
+  }
   uint8_t mark_of(int q, GridPoint p) const { return marks_.get(q, grid_.slot(p)); }
 
   Status prepare(int index, const SelectedQuad& s, Quad& q) {
@@ -981,7 +1133,13 @@ class Refiner {
           work_.push_back({l.quad, c});
         }
       }
-      if (const auto other = mirror(l.quad, l.p)) stack_.push_back(*other);
+      if (const auto other = mirror(l.quad, l.p)) {
+        if (mine(other->quad)) {
+          stack_.push_back(*other);
+        } else {
+          outbox_[lanes_->owner[static_cast<size_t>(other->quad)]].push_back(*other);
+        }
+      }
       for (const GridPoint& a : d.apexes) {
         if (grid_.inside(a)) stack_.push_back({l.quad, a});
       }
@@ -1253,7 +1411,7 @@ class Refiner {
     const Diamond d = grid_.diamond(p);
     if (!MarkGrid::splittable(d)) return;
     const uint32_t slot = grid_.slot(p);
-    uint8_t& m = marks_.at(q, slot);
+    uint8_t& m = mark_at(q, slot);
     if (m != kUnknown) return;
     ++stats_.marks_evaluated;
     const std::optional<Located> other = mirror(q, p);
@@ -1261,7 +1419,7 @@ class Refiner {
     // zeroing two of them per call took a quarter of this function).
     Criterion &own = own_, &across = across_;
     auto recorded = [&](int quad, Criterion& c) {
-      return history_ && quads_[static_cast<size_t>(quad)].recording ? &c : nullptr;
+      return history_ && mine(quad) && quads_[static_cast<size_t>(quad)].recording ? &c : nullptr;
     };
     double px = pixels(q, p, slot, d, recorded(q, own));
     bool stuck = blocked(q, p, d);
@@ -1284,22 +1442,28 @@ class Refiner {
     }
     if (history_) {
       record(q, p, own, stuck);
-      if (halves) record(other->quad, other->p, across, stuck);
+      if (halves && mine(other->quad)) record(other->quad, other->p, across, stuck);
     }
     if (px > o_.pixel_error && !stuck) {
       split(q, p);
       return;
     }
     if (px > o_.pixel_error) {
-      ++stats_.unresolved;
+      if (lanes_) {  // the lane across may count it too: counted once by key
+        const Located key = other && other->quad < q ? *other : Located{q, p};
+        unresolved_keys_.push_back(uint64_t(uint32_t(key.quad)) << 32 | pack(key.p, false));
+      } else {
+        ++stats_.unresolved;
+      }
       stats_.max_unresolved_pixels = std::max(stats_.max_unresolved_pixels, px);
       want_split_across(q, p, d);
       if (other) want_split_across(other->quad, other->p, grid_.diamond(other->p));
     }
     m = kKept;
-    // (A sample's side across, never split, has no mark.)
-    if (halves && marks_.get(other->quad, other_slot) == kUnknown) {
-      marks_.at(other->quad, other_slot) = kKept;
+    // (A sample's side across, never split, has no mark.) Another lane's
+    // quad decides its half itself, the same way.
+    if (halves && mine(other->quad) && marks_.get(other->quad, other_slot) == kUnknown) {
+      mark_at(other->quad, other_slot) = kKept;
     }
   }
 
@@ -1329,7 +1493,7 @@ class Refiner {
   MarkGrid grid_;
   int deepest_ = 0;
   int64_t globe_width_ = 0;
-  std::vector<Quad> quads_;
+  std::vector<Quad>& quads_;  // shared by the lanes
   bool top_down_;
   std::vector<Located> stack_, work_, generation_;
   RefineStats stats_;
@@ -1337,7 +1501,14 @@ class Refiner {
   double corner_;  // tan^2 of the screen's corner
   bool reuse_all_ = false;
   Criterion own_, across_;  // decide()'s
-  int block_shift_ = 0;     // blocks of 2^block_shift_ x 2^block_shift_ cells
+  // Lanes (null: one refiner for every quad).
+  Lanes* lanes_ = nullptr;
+  uint32_t lane_ = 0;
+  MarkBlocks* blocks_ = nullptr;              // the lane's (null: the marks' own)
+  std::vector<std::vector<Located>> outbox_;  // per lane: splits to send
+  std::vector<Located> received_;
+  std::vector<uint64_t> unresolved_keys_;  // quad << 32 | packed point
+  int block_shift_ = 0;                    // blocks of 2^block_shift_ x 2^block_shift_ cells
   int32_t block_columns_ = 0, block_rows_ = 0;
 };
 
@@ -1378,6 +1549,114 @@ double thread_cpu_seconds() {
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
   return static_cast<double>(t.tv_sec) + static_cast<double>(t.tv_nsec) * 1e-9;
 }
+
+// Lanes for a top-down refinement: one per thread of the executor, at most
+// one per quad.
+size_t lane_count(const RefineOptions& o, const Selection& selection) {
+  if (!o.executor || o.variant != RefineVariant::kTopDown) return 1;
+  return std::min<size_t>({o.executor->concurrency(), selection.quads.size(), kMaxLanes});
+}
+
+// A quad's work in the last frame that refined it on this thread: its
+// triangles (about proportional to the criteria evaluated), for dealing the
+// next frame's quads out to lanes.
+thread_local std::unordered_map<geo::TileKey, uint32_t, geo::TileKeyHash> last_work;
+
+void remember_work(const Selection& selection, const RefinedMesh& mesh) {
+  last_work.clear();
+  for (size_t i = 0; i < selection.quads.size(); ++i) {
+    last_work[selection.quads[i].key] = mesh.quads[i].index_count / 3;
+  }
+}
+
+// Deals the quads out to `count` lanes, heaviest first to the lane with the
+// least work so far (by the last frame's work; a quad new to the view counts
+// as the mean), so that the lanes end together.
+std::vector<uint8_t> deal(const Selection& selection, size_t count) {
+  const size_t n = selection.quads.size();
+  std::vector<double> work(n, -1);
+  double known = 0;
+  size_t found = 0;
+  for (size_t i = 0; i < n; ++i) {
+    if (auto it = last_work.find(selection.quads[i].key); it != last_work.end()) {
+      work[i] = it->second + 1.0;
+      known += work[i];
+      ++found;
+    }
+  }
+  const double mean = found ? known / static_cast<double>(found) : 1.0;
+  std::vector<uint32_t> order(n);
+  for (size_t i = 0; i < n; ++i) {
+    if (work[i] < 0) work[i] = mean;
+    order[i] = static_cast<uint32_t>(i);
+  }
+  std::stable_sort(order.begin(), order.end(),
+                   [&](uint32_t a, uint32_t b) { return work[a] > work[b]; });
+  std::vector<double> load(count, 0.0);
+  std::vector<uint8_t> owner(n);
+  for (const uint32_t i : order) {
+    const size_t lane =
+        static_cast<size_t>(std::min_element(load.begin(), load.end()) - load.begin());
+    owner[i] = static_cast<uint8_t>(lane);
+    load[lane] += work[i];
+  }
+  return owner;
+}
+
+// Lanes (Refiner::lane): quads dealt out by their work (deal(); a split
+// crosses to another lane only on a quad's side), refined in rounds until no
+// split is left in any inbox, then each lane's quads emitted by the lane. The
+// mesh is the one a single refiner makes: a mark ends split exactly when a
+// criterion over the threshold or a forced split reaches it, whatever the
+// order (top_down()). `cpu`: the CPU time of the lanes' threads other than
+// the calling one.
+RefinedMesh refine_in_lanes(Refiner& r, const Selection& selection, size_t count,
+                            Executor& executor, double& cpu_seconds) {
+  // Kept for this thread's next frame (allocated once, not faulted in again).
+  // (The lanes' threads name them through references: a thread_local named in
+  // a lambda is the running thread's.)
+  thread_local std::vector<MarkBlocks> kept_blocks;
+  thread_local std::vector<std::vector<uint32_t>> kept_indices;
+  std::vector<MarkBlocks>& blocks = kept_blocks;
+  std::vector<std::vector<uint32_t>>& indices = kept_indices;
+  if (blocks.size() < count) blocks.resize(count);
+  if (indices.size() < count) indices.resize(count);
+  Lanes lanes;
+  lanes.owner = deal(selection, count);
+  for (size_t i = 0; i < count; ++i) lanes.inboxes.push_back(std::make_unique<Lanes::Inbox>());
+  r.seed_top_down();
+  std::vector<Refiner> lane;
+  lane.reserve(count);
+  for (size_t i = 0; i < count; ++i) {
+    blocks[i].reset();
+    lane.push_back(r.lane(lanes, static_cast<uint32_t>(i), blocks[i]));
+  }
+  const std::thread::id caller = std::this_thread::get_id();
+  std::vector<double> cpu(count, 0.0);
+  const auto pending = [&] {
+    return std::any_of(lanes.inboxes.begin(), lanes.inboxes.end(),
+                       [](const auto& in) { return in->any.load(); });
+  };
+  const auto in_lanes = [&](const std::function<void(size_t)>& body) {
+    executor.parallel_for(count, [&](size_t i) {
+      const double start = thread_cpu_seconds();
+      body(i);
+      if (std::this_thread::get_id() != caller) cpu[i] += thread_cpu_seconds() - start;
+    });
+  };
+  bool first = true;
+  while (first || pending()) {
+    first = false;
+    in_lanes([&](size_t i) { lane[i].run_lane(); });
+  }
+  std::vector<RefinedQuad> at(selection.quads.size());
+  in_lanes([&](size_t i) { lane[i].emit_lane(indices[i], at); });
+  for (const Refiner& l : lane) r.merge(l);
+  r.count_unresolved();
+  cpu_seconds = 0;
+  for (double c : cpu) cpu_seconds += c;
+  return r.gather(lanes, indices, at);
+}
 }  // namespace
 
 Result<RefinedMesh> refine(const View& view, TerrainModel& terrain, const Selection& selection,
@@ -1408,19 +1687,27 @@ Result<RefinedMesh> refine(const View& view, TerrainModel& terrain, const Select
     --history->dormant;
     o.history = nullptr;
   }
-  Refiner r(view, terrain, selection, o, cache.impl(), marks, steps);
+  std::vector<Quad> quads;
+  Refiner r(view, terrain, selection, o, cache.impl(), marks, steps, quads);
   RELIEF_CHECK(r.prepare());
   RefinedMesh mesh;
+  double lanes_cpu = 0;  // of the lanes' threads other than this one
   if (r.reuse_all()) {
     mesh = r.reused_mesh();
   } else {
-    if (o.variant == RefineVariant::kTopDown) {
-      r.top_down();
+    const size_t lanes = lane_count(o, selection);
+    if (lanes > 1) {
+      mesh = refine_in_lanes(r, selection, lanes, *o.executor, lanes_cpu);
     } else {
-      r.bottom_up();
+      if (o.variant == RefineVariant::kTopDown) {
+        r.top_down();
+      } else {
+        r.bottom_up();
+      }
+      mesh = r.mesh(last_indices);
+      last_indices = mesh.indices.size();
     }
-    mesh = r.mesh(last_indices);
-    last_indices = mesh.indices.size();
+    remember_work(selection, mesh);
   }
   r.save_history(mesh);
   cache.impl().end_frame(terrain);
@@ -1428,7 +1715,7 @@ Result<RefinedMesh> refine(const View& view, TerrainModel& terrain, const Select
   mesh.stats.history_asleep = asleep;
   mesh.stats.seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  mesh.stats.cpu_seconds = thread_cpu_seconds() - cpu_start;
+  mesh.stats.cpu_seconds = thread_cpu_seconds() - cpu_start + lanes_cpu;
   return mesh;
 }
 

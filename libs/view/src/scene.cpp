@@ -73,6 +73,7 @@ struct Scene::Impl {
   std::unique_ptr<lod::TerrainModel> terrain;
   std::unique_ptr<render::TerrainRenderer> renderer;
   std::unique_ptr<lod::RefineCache> refine_cache;  // edge-mark frames
+  std::unique_ptr<PooledExecutor> refine_threads;  // SceneOptions::refine_threads > 1
   lod::SplitFeedback split_feedback;               // what the last refinements wanted split
   std::optional<lod::Camera> previous;             // of the last frame, unless cut
   lod::Selection last;
@@ -95,6 +96,8 @@ struct Scene::Impl {
     if (edge_marks()) {
       options.selection.neighbour_indices = true;  // refinement walks across quads
       refine_cache = std::make_unique<lod::RefineCache>(options.loader.memory_budget);
+      auto pool = std::make_unique<PooledExecutor>(options.refine_threads);
+      if (pool->concurrency() > 1) refine_threads = std::move(pool);
     }
   }
 
@@ -315,6 +318,7 @@ Result<FrameReport> Scene::draw(const lod::Camera& camera, render::RenderTarget&
     ro.variant = m.options.refine_variant;
     ro.cache = m.refine_cache.get();
     ro.history = &m.refine_history;
+    ro.executor = m.refine_threads.get();
     refined = RELIEF_TRY(lod::refine(view, *m.terrain, selection, ro));
     // SceneOptions::split_feedback, interactive frames: what this frame's
     // refinement wanted split, the next frames split (complete frames stay a

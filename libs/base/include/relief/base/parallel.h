@@ -3,6 +3,7 @@
 // can run it inline and deterministically, and the app can size it to the cores.
 #include <cstddef>
 #include <functional>
+#include <memory>
 
 namespace relief {
 
@@ -32,6 +33,25 @@ class ThreadExecutor final : public Executor {
 
  private:
   unsigned threads_;
+};
+
+// Keeps its threads between calls, waiting (the calling thread is one of
+// them): for work split every frame, where starting threads each time would
+// cost a frame's page faults and start-up (on this project's virtual
+// machines a new thread's stack is memory touched for the first time). One
+// call at a time.
+class PooledExecutor final : public Executor {
+ public:
+  explicit PooledExecutor(unsigned threads = 0);
+  ~PooledExecutor() override;
+  PooledExecutor(const PooledExecutor&) = delete;
+  PooledExecutor& operator=(const PooledExecutor&) = delete;
+  void parallel_for(size_t count, const std::function<void(size_t)>& body) override;
+  unsigned concurrency() const override;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
 };
 
 }  // namespace relief

@@ -23,6 +23,7 @@
 #include <cstdint>
 #include <memory>
 
+#include "relief/base/parallel.h"
 #include "relief/base/result.h"
 #include "relief/lod/camera.h"
 #include "relief/lod/refined_mesh.h"
@@ -91,6 +92,11 @@ class RefineHistory {
 struct RefineOptions {
   double pixel_error = 1.0;  // largest allowed screen-space error, pixels
   RefineVariant variant = RefineVariant::kTopDown;
+  // Top-down: the quads refined by as many lanes as its concurrency, on its
+  // threads (the same mesh; RefineStats::marks_evaluated then counts a
+  // diamond on a side between two lanes' quads once per lane that reached
+  // it). Null, or bottom-up: on the calling thread.
+  Executor* executor = nullptr;
   RefineCache* cache = nullptr;      // null: a cache for this call only
   RefineHistory* history = nullptr;  // null: every quad decided from scratch
 };

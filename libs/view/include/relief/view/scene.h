@@ -41,6 +41,10 @@ struct SceneOptions {
   // again: they take ~8 times the bytes of the decoded tile).
   lod::SelectionOptions selection;
   lod::RefineVariant refine_variant = lod::RefineVariant::kTopDown;
+  // Threads that refine a frame's quads (top-down; the same mesh): 1, the
+  // thread that draws; 0, one per core. More than one: a pool of them kept
+  // by the scene, the drawing thread one of them.
+  unsigned refine_threads = 1;
   // Edge marks, interactive frames: the quads a frame's refinement wanted
   // split (RefineStats::split_wanted), the next frames' selection splits
   // (lod/split_feedback.h), and a frame that wanted any is not complete.
