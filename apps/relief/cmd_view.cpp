@@ -78,8 +78,11 @@ options:
                      draws this one, and swaps it: docs/viewer.md, "Overlap")
   --no-vsync         do not wait for the display's refresh
   --fov, --exaggeration, --lod, --sky, --gpu-budget, --cache, --cache-size,
-  --loader-nice, --refine-threads
-                     as relief render
+  --loader-nice      as relief render
+  --refine-threads N as relief render; by default one per core, but the
+                     render thread alone on a software rasteriser (llvmpipe)
+                     with overlap: its cores rasterise the previous frame
+                     while a frame refines
 %TEXTURE%)";
 
 // An output written at exit must be writable now, not after a long session.
@@ -170,6 +173,7 @@ Result<window::ViewerOptions> viewer_options(const Args& args, const RenderSetup
   o.screenshot_dir = args.get("--screenshot-dir").value_or(".");
   o.panels = !args.has("--no-panels");
   o.overlap = !args.has("--no-overlap");
+  o.refine_threads_auto = !setup.refine_threads;
   o.collect_frames = args.get("--stats").has_value();
   return o;
 }
@@ -191,8 +195,9 @@ nlohmann::json loaders_json(view::Scene& scene, const view::SceneOptions& so) {
   return j;
 }
 
+// `refine_threads`: the scene's (SceneOptions::refine_threads, 0: one per core).
 nlohmann::json stats_json(const window::ViewerSummary& s, const std::string& renderer,
-                          nlohmann::json loaders) {
+                          nlohmann::json loaders, unsigned refine_threads) {
   nlohmann::json frames = nlohmann::json::array();
   for (const window::ViewerFrame& f : s.frames_list) {
     const lod::Camera& c = f.camera;
@@ -227,18 +232,20 @@ nlohmann::json stats_json(const window::ViewerSummary& s, const std::string& ren
                       {"process_cpu_ms", f.process_cpu_ms}});
   }
   auto fps = [](double ms) { return ms > 0 ? 1e3 / ms : 0.0; };
-  nlohmann::json summary = {{"frames", s.frames},
-                            {"skipped_frames", s.skipped_frames},
-                            {"seconds", s.seconds},
-                            {"fps_p50", fps(s.p50_frame_ms)},
-                            {"fps_p99", fps(s.p99_frame_ms)},  // the fps of the p99 frame time
-                            {"p50_frame_ms", s.p50_frame_ms},
-                            {"p99_frame_ms", s.p99_frame_ms},
-                            {"complete", s.complete},
-                            {"path_finished", s.path_finished},
-                            {"renderer", renderer},
-                            {"allocator", allocator_description()},
-                            {"loaders", std::move(loaders)}};
+  nlohmann::json summary = {
+      {"frames", s.frames},
+      {"skipped_frames", s.skipped_frames},
+      {"seconds", s.seconds},
+      {"fps_p50", fps(s.p50_frame_ms)},
+      {"fps_p99", fps(s.p99_frame_ms)},  // the fps of the p99 frame time
+      {"p50_frame_ms", s.p50_frame_ms},
+      {"p99_frame_ms", s.p99_frame_ms},
+      {"complete", s.complete},
+      {"path_finished", s.path_finished},
+      {"renderer", renderer},
+      {"allocator", allocator_description()},
+      {"refine_threads", refine_threads ? refine_threads : std::thread::hardware_concurrency()},
+      {"loaders", std::move(loaders)}};
   return {{"summary", summary}, {"frames", frames}};
 }
 
@@ -321,7 +328,9 @@ int view_session(const Args& args, RenderSetup& setup) {
   }
   if (auto path = args.get("--stats")) {
     const std::string text =
-        stats_json(*summary, (*window)->renderer(), loaders_json((*viewer)->scene(), so)).dump(1);
+        stats_json(*summary, (*window)->renderer(), loaders_json((*viewer)->scene(), so),
+                   (*viewer)->scene().options().refine_threads)
+            .dump(1);
     if (auto st = write_json(*path, text); !st) return report_error(st.error().message);
   }
   std::printf("%zu frames in %.1f s: frame time p50 %.1f ms, p99 %.1f ms; last frame %s\n",

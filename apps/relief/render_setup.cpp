@@ -212,7 +212,7 @@ view::SceneOptions scene_options(const RenderSetup& setup) {
   so.mesh_level = setup.mesh_level;
   so.selection.mode = setup.lod_mode;
   so.refine_variant = setup.refine_variant;
-  so.refine_threads = setup.refine_threads;
+  so.refine_threads = setup.refine_threads.value_or(0);  // one per core unless given
   so.gpu_budget = setup.gpu_budget;
   so.loader.worker_nice = setup.loader_nice;
   so.render.exaggeration = static_cast<float>(setup.exaggeration);

@@ -31,7 +31,7 @@ struct RenderSetup {
   std::array<float, 3> sky{};
   uint64_t gpu_budget = uint64_t{1} << 30;
   int loader_nice = 0;                         // --loader-nice: LoaderOptions::worker_nice
-  unsigned refine_threads = 0;                 // --refine-threads (0: one per core)
+  std::optional<unsigned> refine_threads;      // --refine-threads (0: one per core)
   std::shared_ptr<net::DiskCache> disk_cache;  // L1, remote stores with --cache only
   uint64_t disk_cache_budget = 0;
 };

@@ -85,6 +85,7 @@ class WindowTest : public ::testing::Test {
   std::unique_ptr<Viewer> viewer(const ViewerOptions& o, const Clock& clock) {
     view::SceneOptions so;
     so.mesh_level = 3;
+    so.refine_threads = 0;  // one per core, unless the viewer chooses
     auto v = Viewer::create(*window_, &testing::pyrenees_store(), nullptr, so, o, clock);
     EXPECT_TRUE(v) << v.error().message;
     return v ? std::move(*v) : nullptr;
@@ -517,6 +518,25 @@ TEST_F(WindowTest, WhileFramesFollowEachOtherEachIsSwappedByTheNext) {
     EXPECT_FALSE(*more);
     EXPECT_EQ(window_->swaps() - swaps, 3u);
     EXPECT_FALSE(window_->swap_is_pending());
+  }
+}
+
+// Xvfb's GL is llvmpipe: the viewer left to choose refines on the render
+// thread alone while frames overlap, and keeps what it was given otherwise.
+TEST_F(WindowTest, OnASoftwareRasteriserTheViewerRefinesOnTheRenderThreadAlone) {
+  ASSERT_TRUE(window_->software_renderer()) << window_->renderer();
+  struct Case {
+    bool automatic, overlap;
+    unsigned threads;
+  };
+  for (const Case c : {Case{true, true, 1}, Case{false, true, 0}, Case{true, false, 0}}) {
+    ViewerOptions o;
+    o.start = kCamera;
+    o.refine_threads_auto = c.automatic;
+    o.overlap = c.overlap;
+    auto v = viewer(o, steady_clock());
+    ASSERT_TRUE(v);
+    EXPECT_EQ(v->scene().options().refine_threads, c.threads) << c.automatic << c.overlap;
   }
 }
 

@@ -208,6 +208,9 @@ Result<std::unique_ptr<Viewer>> Viewer::create(Window& window, const tiles::Stor
   impl->threshold = scene.selection.pixel_error;
   // Overlap: the scene's frames return once the GL has their draw calls.
   impl->scene_options.render.finish = !options.overlap;
+  if (options.refine_threads_auto && options.overlap && window.software_renderer()) {
+    impl->scene_options.refine_threads = 1;
+  }
   RELIEF_CHECK(impl->make_scene());
   lod::Camera start = options.start;
   start.width = window.target().width();

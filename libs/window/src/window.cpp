@@ -393,6 +393,11 @@ bool Window::fullscreen() const {
   return impl_->fullscreen;
 }
 
+bool Window::software_renderer() const {
+  const std::string r = renderer();
+  return r.find("llvmpipe") != std::string::npos || r.find("softpipe") != std::string::npos;
+}
+
 std::string Window::renderer() const {
   auto text = [](GLenum name) {
     const auto* s = reinterpret_cast<const char*>(glGetString(name));

@@ -56,6 +56,12 @@ struct ViewerOptions {
   // on both bench/view flights (docs/viewer.md). Off: every frame waits for
   // the GL and is swapped before frame() returns.
   bool overlap = true;
+  // The scene's refine threads left to the viewer (SceneOptions::refine_threads
+  // not chosen by the user): on a software rasteriser with overlap, the
+  // render thread alone, as the cores rasterise the previous frame while a
+  // frame refines and lanes only contend with them (bench/view: the same
+  // fps, p99 a little worse); the scene's refine_threads otherwise.
+  bool refine_threads_auto = false;
   // Idle: once the camera is still (no input, not recording: the path
   // would glide through the pause; not playing a path), frame() waits up to
   // this long for an event instead of drawing. A complete frame (at the

@@ -89,6 +89,8 @@ class Window {
   bool fullscreen() const;
   // GL_RENDERER and GL_VERSION of the context.
   std::string renderer() const;
+  // Whether that is a rasteriser on the CPU (Mesa's llvmpipe or softpipe).
+  bool software_renderer() const;
 
   struct Impl;
 
