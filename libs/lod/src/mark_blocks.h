@@ -68,6 +68,7 @@ class SlotMarks {
     return b[slot % kBlockBytes];
   }
   uint8_t& at(int q, uint32_t slot) { return at(q, slot, blocks_); }
+  MarkBlocks& blocks() { return blocks_; }  // those at() takes from
 
   // A mark about to be read (if its block is there).
   void prefetch(int q, uint32_t slot) const {
