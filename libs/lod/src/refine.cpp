@@ -1561,7 +1561,8 @@ size_t lane_count(const RefineOptions& o, const Selection& selection) {
   return std::min<size_t>({o.executor->concurrency(), selection.quads.size(), kMaxLanes});
 }
 
-// A quad's work in the last frame that refined it on this thread: its
+// A quad's work in the last frame that refined it on this thread with an
+// executor: its
 // triangles (about proportional to the criteria evaluated), for dealing the
 // next frame's quads out to lanes.
 thread_local std::unordered_map<geo::TileKey, uint32_t, geo::TileKeyHash> last_work;
@@ -1711,7 +1712,7 @@ Result<RefinedMesh> refine(const View& view, TerrainModel& terrain, const Select
       mesh = r.mesh(last_indices);
       last_indices = mesh.indices.size();
     }
-    remember_work(selection, mesh);
+    if (o.executor) remember_work(selection, mesh);  // for deal() in a later frame
   }
   r.save_history(mesh);
   cache.impl().end_frame(terrain);
