@@ -1562,9 +1562,8 @@ size_t lane_count(const RefineOptions& o, const Selection& selection) {
 }
 
 // A quad's work in the last frame that refined it on this thread with an
-// executor: its
-// triangles (about proportional to the criteria evaluated), for dealing the
-// next frame's quads out to lanes.
+// executor: its triangles (about proportional to the criteria evaluated),
+// for dealing the next frame's quads out to lanes.
 thread_local std::unordered_map<geo::TileKey, uint32_t, geo::TileKeyHash> last_work;
 
 void remember_work(const Selection& selection, const RefinedMesh& mesh) {
