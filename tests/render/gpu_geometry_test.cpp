@@ -178,7 +178,7 @@ lod::RefinedMesh as_refined(const lod::MeshTopology& mesh, const lod::Selection&
       const lod::MeshVertex& v = mesh.vertices()[mesh.indices()[i]];
       const auto col = static_cast<uint32_t>(v.u * static_cast<float>(r.grid_columns() - 1)),
                  row = static_cast<uint32_t>(v.v * static_cast<float>(r.grid_rows() - 1));
-      r.indices.push_back(row * r.grid_columns() + col);
+      r.indices.push_back(lod::grid_vertex_id(r.grid_k, col, row));
     }
     rq.index_count = n;
     r.quads.push_back(rq);
@@ -194,7 +194,9 @@ lod::RefinedMesh uniform_refined(int k, size_t quads) {
   std::vector<uint32_t> one;
   for (uint32_t j = 0; j + 1 < rows; ++j) {
     for (uint32_t i = 0; i + 1 < cols; ++i) {
-      const uint32_t nw = j * cols + i, ne = nw + 1, sw = nw + cols, se = sw + 1;
+      const uint32_t nw = lod::grid_vertex_id(k, i, j), ne = lod::grid_vertex_id(k, i + 1, j),
+                     sw = lod::grid_vertex_id(k, i, j + 1),
+                     se = lod::grid_vertex_id(k, i + 1, j + 1);
       one.insert(one.end(), {nw, sw, se, nw, se, ne});
     }
   }
@@ -210,10 +212,9 @@ std::vector<lod::MeshVertex> refined_vertices(const lod::RefinedMesh& r) {
   std::vector<lod::MeshVertex> out;
   for (const auto& q : r.quads) {
     for (uint32_t i = q.first_index; i < q.first_index + q.index_count; ++i) {
-      const uint32_t id = r.indices[i];
-      out.push_back(
-          {static_cast<float>(id % r.grid_columns()) / static_cast<float>(r.grid_columns() - 1),
-           static_cast<float>(id / r.grid_columns()) / static_cast<float>(r.grid_rows() - 1)});
+      const lod::GridVertexPosition p = lod::grid_vertex_position(r.grid_k, r.indices[i]);
+      out.push_back({static_cast<float>(p.i) / static_cast<float>(r.grid_columns() - 1),
+                     static_cast<float>(p.j) / static_cast<float>(r.grid_rows() - 1)});
     }
   }
   return out;

@@ -481,6 +481,7 @@ class Refiner {
         marks_(marks),
         steps_(steps),
         grid_(grid_of(terrain)),
+        vertex_ids_(grid_.k()),
         quads_(quads),
         top_down_(options.variant == RefineVariant::kTopDown),
         history_(options.history ? &options.history->impl() : nullptr),
@@ -1484,7 +1485,10 @@ class Refiner {
     // Counter-clockwise seen from above: in (x, -y), as MeshTopology.
     const int64_t area = int64_t{a.x - r.x} * (r.y - b.y) - int64_t{r.y - a.y} * (b.x - r.x);
     if (area < 0) std::swap(a, b);
-    out.insert(out.end(), {grid_.id(r), grid_.id(a), grid_.id(b)});
+    const auto id = [this](GridPoint g) {
+      return vertex_ids_(static_cast<uint32_t>(g.x), static_cast<uint32_t>(g.y));
+    };
+    out.insert(out.end(), {id(r), id(a), id(b)});
   }
 
   const View& view_;
@@ -1495,6 +1499,7 @@ class Refiner {
   SlotMarks& marks_;
   StepTables& steps_;
   MarkGrid grid_;
+  GridVertexIds vertex_ids_;  // of the triangles emitted
   int deepest_ = 0;
   int64_t globe_width_ = 0;
   std::span<Quad> quads_;  // one per selected quad, shared by the lanes

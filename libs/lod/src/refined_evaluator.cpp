@@ -37,12 +37,12 @@ RefinedEvaluator::RefinedEvaluator(TerrainModel& terrain, const Selection& s, co
 }
 
 GridPos RefinedEvaluator::pos(uint32_t id) const {
-  const int c = static_cast<int>(mesh_.grid_columns());
-  return {static_cast<int>(id) % c, static_cast<int>(id) / c};
+  const GridVertexPosition p = grid_vertex_position(mesh_.grid_k, id);
+  return {static_cast<int>(p.i), static_cast<int>(p.j)};
 }
 
 uint32_t RefinedEvaluator::id(GridPos p) const {
-  return static_cast<uint32_t>(p.y) * mesh_.grid_columns() + static_cast<uint32_t>(p.x);
+  return grid_vertex_id(mesh_.grid_k, static_cast<uint32_t>(p.x), static_cast<uint32_t>(p.y));
 }
 
 std::pair<double, double> RefinedEvaluator::lonlat(const SelectedQuad& q, GridPos p) const {

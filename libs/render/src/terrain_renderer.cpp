@@ -67,8 +67,7 @@ uint32_t vertex_flags(uint8_t sides, uint8_t corner) {
 // The vertex grid of refined meshes at level k (lod/refined_mesh.h).
 std::vector<GridVertex> refined_grid(int k) {
   const uint32_t nx = 2u << k, ny = 1u << k;
-  std::vector<GridVertex> out;
-  out.reserve(static_cast<size_t>(nx + 1) * (ny + 1));
+  std::vector<GridVertex> out(static_cast<size_t>(nx + 1) * (ny + 1));
   for (uint32_t j = 0; j <= ny; ++j) {
     for (uint32_t i = 0; i <= nx; ++i) {
       uint8_t s = 0, c = 0;
@@ -80,8 +79,9 @@ std::vector<GridVertex> refined_grid(int k) {
       if ((s & lod::kNorth) && (s & lod::kEast)) c = lod::kNorthEast;
       if ((s & lod::kSouth) && (s & lod::kWest)) c = lod::kSouthWest;
       if ((s & lod::kSouth) && (s & lod::kEast)) c = lod::kSouthEast;
-      out.push_back({static_cast<float>(i) / static_cast<float>(nx),
-                     static_cast<float>(j) / static_cast<float>(ny), vertex_flags(s, c)});
+      out[lod::grid_vertex_id(k, i, j)] = {static_cast<float>(i) / static_cast<float>(nx),
+                                           static_cast<float>(j) / static_cast<float>(ny),
+                                           vertex_flags(s, c)};
     }
   }
   return out;

@@ -5,7 +5,7 @@
 //
 // The grid of a quad has (2^(k+1) + 1) x (2^k + 1) vertices (the quad is twice
 // as wide as tall in degrees), vertex (i, j) at quad-space u = i / 2^(k+1),
-// v = j / 2^k (u east, v south, as MeshVertex), id j * (2^(k+1) + 1) + i. Its
+// v = j / 2^k (u east, v south, as MeshVertex), id grid_vertex_id(k, i, j). Its
 // spacing is half a sample of the quad's data window: vertices with odd
 // (i, j) are sample centres, even ones sample corners. Heights come from the
 // quad's data window exactly as for MeshTopology vertices (vertices on a side
@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "relief/geo/tile_key.h"
+#include "relief/lod/grid_vertex_ids.h"
 
 namespace relief::lod {
 
