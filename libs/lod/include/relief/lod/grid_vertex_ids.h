@@ -43,6 +43,14 @@ constexpr uint32_t scramble(uint32_t id, uint32_t count) {
   if ((id >> 8) >= (count >> 8)) return id;
   return id ^ (((id >> 8) * 0x9e3779b1u) >> 24);
 }
+// The Z-order code of a core vertex (i < 2^(k+1), j < 2^k) is a column's
+// bits or-ed with a row's.
+constexpr uint32_t column_bits(int k, uint32_t i) {
+  return (i >> k) << (2 * k) | spread(i & ((1u << k) - 1));
+}
+constexpr uint32_t row_bits(uint32_t j) {
+  return spread(j) << 1;
+}
 }  // namespace grid_ids
 
 // Vertex (i, j) of the grid at level k (0 <= k <= 15).
@@ -50,7 +58,7 @@ constexpr uint32_t grid_vertex_id(int k, uint32_t i, uint32_t j) {
   const uint32_t n = 1u << k, core = 2 * n * n, count = (2 * n + 1) * (n + 1);
   uint32_t id = 0;
   if (i < 2 * n && j < n) {
-    id = (i >> k) << (2 * k) | grid_ids::spread(i & (n - 1)) | grid_ids::spread(j) << 1;
+    id = grid_ids::column_bits(k, i) | grid_ids::row_bits(j);
   } else {
     id = i == 2 * n ? core + j : core + n + 1 + i;  // the east column, else the south row
   }
@@ -80,10 +88,10 @@ class GridVertexIds {
   explicit GridVertexIds(int k) : k_(k), count_(((2u << k) + 1) * ((1u << k) + 1)) {
     const uint32_t n = 1u << k;
     for (uint32_t i = 0; i < 2 * n; ++i) {
-      columns_.push_back((i >> k) << (2 * k) | grid_ids::spread(i & (n - 1)));
+      columns_.push_back(grid_ids::column_bits(k, i));
     }
     columns_.push_back(kEdge);
-    for (uint32_t j = 0; j < n; ++j) rows_.push_back(grid_ids::spread(j) << 1);
+    for (uint32_t j = 0; j < n; ++j) rows_.push_back(grid_ids::row_bits(j));
     rows_.push_back(kEdge);
   }
   uint32_t operator()(uint32_t i, uint32_t j) const {
