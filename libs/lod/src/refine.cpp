@@ -383,6 +383,12 @@ constexpr size_t kAhead = 8;
 // loses ~1e-8).
 constexpr double kSafety = 1e-9, kSlackMetres = 1e-6, kAngleSlack = 1e-7;
 
+// geo::to_ecef's N(latitude), from the latitude's sine.
+double prime_vertical_radius(double sin_lat) {
+  return geo::wgs84::kSemiMajorAxis /
+         std::sqrt(1 - geo::wgs84::kFirstEccentricitySquared * sin_lat * sin_lat);
+}
+
 struct SinCos {
   double s = 0, c = 1;
   explicit SinCos(double radians = 0) : s(std::sin(radians)), c(std::cos(radians)) {}
@@ -422,6 +428,9 @@ struct Quad {
   // sides, and i cells (i = 0 .. 2n) of its level.
   SinCos west, north;
   const SinCos* steps = nullptr;
+  // The prime vertical's radius of curvature at each grid row (its square
+  // root and division were on the split criterion's critical path).
+  std::vector<double> normals;
   double level_error = 0;
   std::shared_ptr<const DiamondErrors> errors;  // null: no data, height 0
   std::shared_ptr<const SideEdges> edges;       // null: no side takes coarser data
@@ -451,8 +460,13 @@ struct Criterion {
 };
 
 struct Located {
-  int quad = -1;
+  Located() = default;
+  Located(int q, GridPoint at) : p(at), quad(q) {}
+  // The point first: popped from a stack, it is then one aligned 8-byte
+  // load (quad first, the compiler built it from two stores and a load
+  // spanning both, which stalled store forwarding: a fifth of split()).
   GridPoint p;
+  int quad = -1;
 };
 
 // Top-down refinement on several threads ("Lanes", below): each quad is
@@ -486,6 +500,7 @@ class Refiner {
         top_down_(options.variant == RefineVariant::kTopDown),
         history_(options.history ? &options.history->impl() : nullptr),
         corner_(view.tan_half_x * view.tan_half_x + view.tan_half_y * view.tan_half_y),
+        quick_metres_(view.pixels_per_radian * (1 + corner_) / options.pixel_error),
         block_shift_(std::max(grid_.k() - 3, 0)),
         block_columns_((2 * grid_.n() >> block_shift_) + 1),
         block_rows_((grid_.n() >> block_shift_) + 1) {}
@@ -981,6 +996,12 @@ class Refiner {
     q.west = SinCos(q.bounds.west * kDegree);
     q.north = SinCos(q.bounds.north * kDegree);
     q.steps = steps_.of(s.key.level, n);
+    q.normals.resize(static_cast<size_t>(n) + 1);
+    for (int32_t y = 0; y <= n; ++y) {
+      const SinCos& step = q.steps[y];
+      const double sin_lat = q.north.s * step.c - q.north.c * step.s;
+      q.normals[static_cast<size_t>(y)] = prime_vertical_radius(sin_lat);
+    }
     q.level_error = RELIEF_TRY(terrain_.level_error(s.key));
     if (q.level_error > 0) {
       // No split makes up for the distance between the level's full mesh
@@ -1232,15 +1253,23 @@ class Refiner {
     const double sin_lat = quad.north.s * y.c - quad.north.c * y.s;
     const double cos_lat = quad.north.c * y.c + quad.north.s * y.s;
     const double h = (lo + hi) / 2;
-    const double normal = geo::wgs84::kSemiMajorAxis /
-                          std::sqrt(1 - geo::wgs84::kFirstEccentricitySquared * sin_lat * sin_lat);
+    const double normal = quad.normals[static_cast<size_t>(p.y)];
     const Vec3 c{(normal + h) * cos_lat * cos_lon, (normal + h) * cos_lat * sin_lon,
                  (normal * (1 - geo::wgs84::kFirstEccentricitySquared) + h) * sin_lat};
     const double radius =
         kArc * std::sqrt(2.0) * r * quad.cell * kDegree + (hi - lo) / 2 + pad + kRounding;
     // Most diamonds are far below the threshold: the distance bound of
     // vertical_error_pixels, from a nearer point than the box's, settles them.
-    const double near = length(c - view_.eye) - std::sqrt(3.0) * radius;
+    // Without margins to record, its test (K m / (|c - eye| - sqrt(3) r) <= t)
+    // squared, without a root or a division: they were most of the time of
+    // this test, on the critical path. It may fail where the one below would
+    // pass (rounding): the exact criterion decides those.
+    const Vec3 to_centre = c - view_.eye;
+    if (!out && !exact) {
+      const double reach = quick_metres_ * metres + std::sqrt(3.0) * radius;
+      if (dot(to_centre, to_centre) > reach * reach * (1 + kSafety)) return 0;  // under t
+    }
+    const double near = length(to_centre) - std::sqrt(3.0) * radius;
     if (near > 0) {
       const double corner =
           view_.tan_half_x * view_.tan_half_x + view_.tan_half_y * view_.tan_half_y;
@@ -1508,6 +1537,9 @@ class Refiner {
   RefineStats stats_;
   RefineHistory::Impl* history_;
   double corner_;  // tan^2 of the screen's corner
+  // Metres of distance per metre of error at which the distance bound
+  // reaches the threshold: K (1 + corner) / t.
+  double quick_metres_;
   bool reuse_all_ = false;
   Criterion own_, across_;  // decide()'s
   // Lanes (null: one refiner for every quad).
