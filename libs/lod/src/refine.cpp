@@ -1103,10 +1103,13 @@ class Refiner {
     return {};
   }
 
-  // The same edge mark in the quad across the border, if one is selected.
-  std::optional<Located> mirror(int q, GridPoint p) {
+  // The same edge mark in the quad across the border, if one is selected:
+  // true and `out`. (Not an optional<Located>: returned in two registers,
+  // the compiler assembled it on the stack from a 32-bit and an 8-bit store
+  // and read it back in one 64-bit load, which stalled store forwarding.)
+  bool mirror(int q, GridPoint p, Located& out) {
     const uint8_t sides = grid_.sides(p);
-    if (!sides) return std::nullopt;
+    if (!sides) return false;
     const int side = (sides & kWest) ? 0 : (sides & kEast) ? 1 : (sides & kNorth) ? 2 : 3;
     const Quad& from = quads_[static_cast<size_t>(q)];
     const int64_t gx = from.ox + p.x * from.scale, gy = from.oy + p.y * from.scale;
@@ -1116,7 +1119,7 @@ class Refiner {
       if (j < 0) continue;
       const Quad& to = quads_[static_cast<size_t>(j)];
       int64_t along, max;
-      GridPoint out;
+      GridPoint at;
       if (side < 2) {
         along = gy - to.oy;
         max = n;
@@ -1128,14 +1131,15 @@ class Refiner {
       along /= to.scale;
       if (along < 0 || along > max) continue;
       const int32_t a = static_cast<int32_t>(along);
-      out = side == 0   ? GridPoint{2 * n, a}
-            : side == 1 ? GridPoint{0, a}
-            : side == 2 ? GridPoint{a, n}
-                        : GridPoint{a, 0};
-      if (grid_.diamond(out).kind == MarkKind::kVertex) return std::nullopt;
-      return Located{j, out};
+      at = side == 0   ? GridPoint{2 * n, a}
+           : side == 1 ? GridPoint{0, a}
+           : side == 2 ? GridPoint{a, n}
+                       : GridPoint{a, 0};
+      if (grid_.diamond(at).kind == MarkKind::kVertex) return false;
+      out = Located{j, at};
+      return true;
     }
-    return std::nullopt;
+    return false;
   }
 
   // Splits a diamond and, to keep the mesh conforming, its parents (forced
@@ -1159,11 +1163,11 @@ class Refiner {
           work_.push_back({l.quad, c});
         }
       }
-      if (const auto other = mirror(l.quad, l.p)) {
-        if (mine(other->quad)) {
-          stack_.push_back(*other);
+      if (Located other; mirror(l.quad, l.p, other)) {
+        if (mine(other.quad)) {
+          stack_.push_back(other);
         } else {
-          outbox_[lanes_->owner[static_cast<size_t>(other->quad)]].push_back(*other);
+          outbox_[lanes_->owner[static_cast<size_t>(other.quad)]].push_back(other);
         }
       }
       for (const GridPoint& a : d.apexes) {
@@ -1448,7 +1452,8 @@ class Refiner {
     uint8_t& m = mark_at(q, slot);
     if (m != kUnknown) return;
     ++stats_.marks_evaluated;
-    const std::optional<Located> other = mirror(q, p);
+    Located across_at;
+    const Located* other = mirror(q, p, across_at) ? &across_at : nullptr;
     // The criterion's parts only where record() keeps them (in members:
     // zeroing two of them per call took a quarter of this function).
     Criterion &own = own_, &across = across_;
@@ -1517,7 +1522,12 @@ class Refiner {
     const auto id = [this](GridPoint g) {
       return vertex_ids_(static_cast<uint32_t>(g.x), static_cast<uint32_t>(g.y));
     };
-    out.insert(out.end(), {id(r), id(a), id(b)});
+    // One at a time: inserted from a list, the ids went through the stack as
+    // 32-bit stores read back in a 64-bit load (a stalled store forwarding).
+    const uint32_t ir = id(r), ia = id(a), ib = id(b);
+    out.push_back(ir);
+    out.push_back(ia);
+    out.push_back(ib);
   }
 
   const View& view_;
