@@ -17,7 +17,7 @@ Ecef to_ecef(const Geodetic& g) {
   const double lat = degrees_to_radians(g.lat_deg);
   const double lon = degrees_to_radians(g.lon_deg);
   const double s = std::sin(lat), c = std::cos(lat);
-  const double n = kSemiMajorAxis / std::sqrt(1.0 - kFirstEccentricitySquared * s * s);
+  const double n = prime_vertical_radius(s);
   return {(n + g.height_m) * c * std::cos(lon), (n + g.height_m) * c * std::sin(lon),
           (n * (1.0 - kFirstEccentricitySquared) + g.height_m) * s};
 }

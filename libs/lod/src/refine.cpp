@@ -383,12 +383,6 @@ constexpr size_t kAhead = 8;
 // loses ~1e-8).
 constexpr double kSafety = 1e-9, kSlackMetres = 1e-6, kAngleSlack = 1e-7;
 
-// geo::to_ecef's N(latitude), from the latitude's sine.
-double prime_vertical_radius(double sin_lat) {
-  return geo::wgs84::kSemiMajorAxis /
-         std::sqrt(1 - geo::wgs84::kFirstEccentricitySquared * sin_lat * sin_lat);
-}
-
 struct SinCos {
   double s = 0, c = 1;
   explicit SinCos(double radians = 0) : s(std::sin(radians)), c(std::cos(radians)) {}
@@ -1000,7 +994,7 @@ class Refiner {
     for (int32_t y = 0; y <= n; ++y) {
       const SinCos& step = q.steps[y];
       const double sin_lat = q.north.s * step.c - q.north.c * step.s;
-      q.normals[static_cast<size_t>(y)] = prime_vertical_radius(sin_lat);
+      q.normals[static_cast<size_t>(y)] = geo::wgs84::prime_vertical_radius(sin_lat);
     }
     q.level_error = RELIEF_TRY(terrain_.level_error(s.key));
     if (q.level_error > 0) {
@@ -1273,18 +1267,17 @@ class Refiner {
       const double reach = quick_metres_ * metres + std::sqrt(3.0) * radius;
       if (dot(to_centre, to_centre) > reach * reach * (1 + kSafety)) return 0;  // under t
     }
-    const double near = length(to_centre) - std::sqrt(3.0) * radius;
+    const double centre_distance = length(to_centre);
+    const double near = centre_distance - std::sqrt(3.0) * radius;
     if (near > 0) {
-      const double corner =
-          view_.tan_half_x * view_.tan_half_x + view_.tan_half_y * view_.tan_half_y;
-      const double bound = view_.pixels_per_radian * metres * (1 + corner) / near;
+      const double bound = view_.pixels_per_radian * metres * (1 + corner_) / near;
       if (bound <= o_.pixel_error) {
         if (out) *out = {bound, metres, true, near, 0, {}};
         return bound;
       }
     }
     const Box box{c - Vec3{radius, radius, radius}, c + Vec3{radius, radius, radius}};
-    const double far = length(c - view_.eye) + std::sqrt(3.0) * radius;
+    const double far = centre_distance + std::sqrt(3.0) * radius;
     if (!exact) {
       // The criterion is min(distance bound, angle bound), or the distance
       // bound alone when a corner is behind the eye (vertical_error_parts).

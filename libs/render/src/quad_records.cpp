@@ -37,9 +37,7 @@ const QuadRecords::Corners& QuadRecords::corners(const geo::TileKey& key) {
     const double p = lat * kDeg, l = lon * kDeg, s = std::sin(p);
     const double t[4] = {std::cos(p), s, std::cos(l), std::sin(l)};
     for (int k = 0; k < 4; ++k) c.trig[i][k] = static_cast<float>(t[k]);
-    c.radius[i] =
-        static_cast<float>(geo::wgs84::kSemiMajorAxis /
-                           std::sqrt(1.0 - geo::wgs84::kFirstEccentricitySquared * s * s));
+    c.radius[i] = static_cast<float>(geo::wgs84::prime_vertical_radius(s));
   }
   return cache_.emplace(key, c).first->second;
 }

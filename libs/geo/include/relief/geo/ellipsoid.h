@@ -1,6 +1,7 @@
 #pragma once
 // WGS84 reference ellipsoid and geodetic <-> Earth-centred Earth-fixed (ECEF)
 // conversion, all in double precision.
+#include <cmath>
 
 namespace relief::geo {
 
@@ -19,6 +20,12 @@ inline constexpr double kSemiMajorAxis = 6378137.0;
 inline constexpr double kFlattening = 1.0 / 298.257223563;
 inline constexpr double kSemiMinorAxis = kSemiMajorAxis * (1.0 - kFlattening);
 inline constexpr double kFirstEccentricitySquared = kFlattening * (2.0 - kFlattening);
+
+// The prime vertical's radius of curvature N at a latitude, from its sine:
+// to_ecef's (N + h) cos(lat) cos(lon), ...
+inline double prime_vertical_radius(double sin_lat) {
+  return kSemiMajorAxis / std::sqrt(1.0 - kFirstEccentricitySquared * sin_lat * sin_lat);
+}
 }  // namespace wgs84
 
 Ecef to_ecef(const Geodetic& g);
