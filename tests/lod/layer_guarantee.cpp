@@ -21,6 +21,37 @@ double projected_distance(const View& view, const FinestSample& s, const Vec3& o
   return std::hypot(ax - bx, ay - by);
 }
 
+// `samples_per_quad` random finest samples under each selected quad (a
+// generator seeded with `seed`), each on screen within `pixel_error` of the
+// mesh point `at(quad, lon, lat)` above it; more than 1000 of them on screen.
+template <class Evaluator, class At>
+void expect_within(const tiles::Store& store, TerrainModel& terrain, const View& view,
+                   const Selection& selection, const Evaluator& eval, int samples_per_quad,
+                   unsigned seed, double pixel_error, At at) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> unit(0, 1);
+  size_t compared = 0;
+  double worst = 0;
+  for (const SelectedQuad& q : selection.quads) {
+    const geo::GeoBox b = q.key.bounds();
+    for (int n = 0; n < samples_per_quad; ++n) {
+      const auto s = finest_sample(store, terrain, b.west + unit(rng) * b.width(),
+                                   b.south + unit(rng) * b.height());
+      if (!s) continue;
+      const SelectedQuad* in = eval.containing(s->lon, s->lat);
+      if (!in || near_data_edge(store, *s, in->key.level)) continue;
+      const Result<Vec3> on_mesh = at(*in, s->lon, s->lat);
+      ASSERT_TRUE(on_mesh) << on_mesh.error().message;
+      const double d = projected_distance(view, *s, *on_mesh);
+      if (d < 0) continue;
+      worst = std::max(worst, d);
+      ++compared;
+    }
+  }
+  EXPECT_GT(compared, 1000u);
+  EXPECT_LE(worst, pixel_error) << "worst " << worst << " px over " << compared;
+}
+
 }  // namespace
 
 std::optional<FinestSample> finest_sample(const tiles::Store& store, TerrainModel& terrain,
@@ -58,28 +89,10 @@ void expect_quads_keep_the_guarantee(const tiles::Store& store,
     ASSERT_TRUE(selection) << selection.error().message;
     EXPECT_LE(selection->stats.max_error_pixels, c.pixel_error);
     MeshEvaluator eval(terrain, *selection);
-    std::mt19937 rng(5);
-    std::uniform_real_distribution<double> unit(0, 1);
-    size_t compared = 0;
-    double worst = 0;
-    for (const SelectedQuad& q : selection->quads) {
-      const geo::GeoBox b = q.key.bounds();
-      for (int n = 0; n < samples_per_quad; ++n) {
-        const auto s = finest_sample(store, terrain, b.west + unit(rng) * b.width(),
-                                     b.south + unit(rng) * b.height());
-        if (!s) continue;
-        const SelectedQuad* in = eval.containing(s->lon, s->lat);
-        if (!in || near_data_edge(store, *s, in->key.level)) continue;
-        auto on_mesh = eval.mesh_point(*in, s->lon, s->lat);
-        ASSERT_TRUE(on_mesh) << on_mesh.error().message;
-        const double d = projected_distance(*view, *s, *on_mesh);
-        if (d < 0) continue;
-        worst = std::max(worst, d);
-        ++compared;
-      }
-    }
-    EXPECT_GT(compared, 1000u);
-    EXPECT_LE(worst, c.pixel_error) << "worst " << worst << " px over " << compared;
+    expect_within(store, terrain, *view, *selection, eval, samples_per_quad, 5, c.pixel_error,
+                  [&](const SelectedQuad& q, double lon, double lat) {
+                    return eval.mesh_point(q, lon, lat);
+                  });
   }
 }
 
@@ -116,29 +129,12 @@ void expect_refined_meshes_keep_the_guarantee(const tiles::Store& store,
     EXPECT_EQ(refined->stats.unresolved, 0u);
     EXPECT_EQ(refined->stats.too_coarse, 0u);
     RefinedEvaluator eval(terrain, *selection, *refined);
-    std::mt19937 rng(7);
-    std::uniform_real_distribution<double> unit(0, 1);
-    size_t compared = 0;
-    double worst = 0;
-    for (const SelectedQuad& q : selection->quads) {
-      const geo::GeoBox b = q.key.bounds();
-      for (int n = 0; n < samples_per_quad; ++n) {
-        const auto s = finest_sample(store, terrain, b.west + unit(rng) * b.width(),
-                                     b.south + unit(rng) * b.height());
-        if (!s) continue;
-        const SelectedQuad* in = eval.containing(s->lon, s->lat);
-        if (!in || near_data_edge(store, *s, in->key.level)) continue;
-        auto on_mesh = eval.point(*in, s->lon, s->lat);
-        ASSERT_TRUE(on_mesh) << on_mesh.error().message;
-        ASSERT_TRUE(*on_mesh) << "no triangle of " << in->key.to_string();
-        const double d = projected_distance(*view, *s, **on_mesh);
-        if (d < 0) continue;
-        worst = std::max(worst, d);
-        ++compared;
-      }
-    }
-    EXPECT_GT(compared, 1000u);
-    EXPECT_LE(worst, c.pixel_error) << "worst " << worst << " px over " << compared;
+    expect_within(store, terrain, *view, *selection, eval, samples_per_quad, 7, c.pixel_error,
+                  [&](const SelectedQuad& q, double lon, double lat) -> Result<Vec3> {
+                    auto p = RELIEF_TRY(eval.point(q, lon, lat));
+                    if (!p) return fail("no triangle of " + q.key.to_string());
+                    return *p;
+                  });
   }
 }
 
