@@ -5,6 +5,7 @@
 // meshes) are bit-identical, and a view that does not change uploads nothing.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <map>
@@ -735,6 +736,49 @@ TEST(HeightSlopes, DifferencesAcrossEachSampleClampedAtTheEdges) {
   const float expected[12] = {2 - 1,  8 - 1, 4 - 1,  16 - 2, 4 - 2,   32 - 4,  //
                               16 - 8, 8 - 1, 32 - 8, 16 - 2, 32 - 16, 32 - 4};
   for (size_t i = 0; i < 12; ++i) EXPECT_EQ(s[i], to_half(expected[i])) << i;
+}
+
+// The interior rows take a vectorised path (eight samples at a time where
+// the CPU converts to half floats itself): every half equals to_half() of
+// the clamped differences, saturation, NaN, subnormals and -0 included.
+TEST(HeightSlopes, EveryPathGivesTheHalvesOfTheClampedDifferences) {
+  std::mt19937 rng(3);
+  for (const auto& [w, h] :
+       {std::pair{37, 9}, std::pair{514, 6}, std::pair{8, 4}, std::pair{2, 5}}) {
+    std::vector<float> heights(static_cast<size_t>(w) * h);
+    for (float& v : heights) {
+      switch (rng() % 6) {
+        case 0:
+          v = std::nanf("");
+          break;
+        case 1:
+          v = rng() % 2 ? 1e9f : -1e9f;
+          break;
+        case 2:
+          v = std::ldexp(static_cast<float>(rng() % 100), -30);
+          break;
+        case 3:
+          v = -0.0f;
+          break;
+        default:
+          v = static_cast<float>(rng() % 100000) / 7.0f - 5000.0f;
+      }
+    }
+    auto at = [&](int x, int y) {
+      return heights[static_cast<size_t>(std::clamp(y, 0, h - 1)) * w + std::clamp(x, 0, w - 1)];
+    };
+    const std::vector<uint16_t> s = height_slopes(heights, w, h);
+    ASSERT_EQ(s.size(), heights.size() * 2);
+    for (int y = 0; y < h; ++y) {
+      for (int x = 0; x < w; ++x) {
+        const size_t i = (static_cast<size_t>(y) * w + x) * 2;
+        ASSERT_EQ(s[i], to_half(at(x + 1, y) - at(x - 1, y)))
+            << w << "x" << h << " " << x << "," << y;
+        ASSERT_EQ(s[i + 1], to_half(at(x, y + 1) - at(x, y - 1)))
+            << w << "x" << h << " " << x << "," << y;
+      }
+    }
+  }
 }
 
 // What the fragment shader shades with, on real tiles through the GL's own

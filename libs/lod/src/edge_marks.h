@@ -103,6 +103,20 @@ class MarkGrid {
   // frame visits first lie together in memory instead of one per grid row.
   uint32_t slots() const { return offsets_[2 * k_ - 1]; }
   uint32_t slot(GridPoint centre) const;
+  // slot() where the diamond's kind and size are known (2^j: h of a
+  // diagonal, s of an axis diamond): the same numbers, without finding them.
+  uint32_t diagonal_slot(int j, GridPoint c) const {
+    return offsets_[static_cast<size_t>(2 * j)] +
+           (static_cast<uint32_t>(c.y) >> (j + 1)) * (static_cast<uint32_t>(n_) >> j) +
+           (static_cast<uint32_t>(c.x) >> (j + 1));
+  }
+  uint32_t axis_slot(int j, GridPoint c, bool horizontal) const {
+    const uint32_t n = static_cast<uint32_t>(n_);
+    const uint32_t x = static_cast<uint32_t>(c.x), y = static_cast<uint32_t>(c.y);
+    const uint32_t first = offsets_[static_cast<size_t>(2 * j - 1)];
+    if (horizontal) return first + (y >> (j + 1)) * (n >> j) + (x >> (j + 1));
+    return first + ((n >> (j + 1)) + 1) * (n >> j) + (y >> (j + 1)) * ((n >> j) + 1) + (x >> (j + 1));
+  }
 
  private:
   int32_t lowbit(int32_t v) const { return v == 0 ? 4 * n_ : v & -v; }
@@ -147,18 +161,13 @@ inline Diamond MarkGrid::diamond(GridPoint c) const {
 
 inline uint32_t MarkGrid::slot(GridPoint c) const {
   const int32_t bx = lowbit(c.x), by = lowbit(c.y);
-  const uint32_t n = static_cast<uint32_t>(n_);
-  const uint32_t x = static_cast<uint32_t>(c.x), y = static_cast<uint32_t>(c.y);
   if (bx == by) {  // a diagonal: both coordinates odd multiples of h
-    const int j = std::countr_zero(static_cast<uint32_t>(bx));
-    return offsets_[static_cast<size_t>(2 * j)] + (y >> (j + 1)) * (n >> j) + (x >> (j + 1));
+    return diagonal_slot(std::countr_zero(static_cast<uint32_t>(bx)), c);
   }
   const int32_t s = std::min(bx, by);
   const int j = std::countr_zero(static_cast<uint32_t>(s));
   assert(j >= 1 && "a sample's side: never split, no slot");
-  const uint32_t first = offsets_[static_cast<size_t>(2 * j - 1)];
-  if (bx < by) return first + (y >> (j + 1)) * (n >> j) + (x >> (j + 1));  // horizontal
-  return first + ((n >> (j + 1)) + 1) * (n >> j) + (y >> (j + 1)) * ((n >> j) + 1) + (x >> (j + 1));
+  return axis_slot(j, c, bx < by);
 }
 
 }  // namespace relief::lod
