@@ -115,7 +115,8 @@ class MarkGrid {
     const uint32_t x = static_cast<uint32_t>(c.x), y = static_cast<uint32_t>(c.y);
     const uint32_t first = offsets_[static_cast<size_t>(2 * j - 1)];
     if (horizontal) return first + (y >> (j + 1)) * (n >> j) + (x >> (j + 1));
-    return first + ((n >> (j + 1)) + 1) * (n >> j) + (y >> (j + 1)) * ((n >> j) + 1) + (x >> (j + 1));
+    return first + ((n >> (j + 1)) + 1) * (n >> j) + (y >> (j + 1)) * ((n >> j) + 1) +
+           (x >> (j + 1));
   }
 
  private:
