@@ -77,6 +77,9 @@ options:
                      next (by default the next frame is refined while the GL
                      draws this one, and swaps it: docs/viewer.md, "Overlap")
   --no-vsync         do not wait for the display's refresh
+  --uploads-per-frame N  a frame uploads at most N elevation tiles new to the
+                     GPU; quads needing more wait for the next frames
+                     (default %UPLOADS%; 0: no limit)
   --fov, --exaggeration, --lod, --sky, --gpu-budget, --cache, --cache-size,
   --loader-nice      as relief render
   --refine-threads N as relief render; by default one per core, but the
@@ -84,6 +87,11 @@ options:
                      with overlap: its cores rasterise the previous frame
                      while a frame refines
 %TEXTURE%)";
+
+// Elevation tiles a frame of the viewer uploads at most (SceneOptions::
+// uploads_per_frame): ~0.2 ms each on llvmpipe with their slopes, and in
+// bench/view's flights up to 76 arrived in one frame (docs/viewer.md).
+constexpr uint32_t kUploadsPerFrame = 16;
 
 // An output written at exit must be writable now, not after a long session.
 Status check_writable(const char* option, const std::string& path) {
@@ -195,9 +203,10 @@ nlohmann::json loaders_json(view::Scene& scene, const view::SceneOptions& so) {
   return j;
 }
 
-// `refine_threads`: the scene's (SceneOptions::refine_threads, 0: one per core).
+// `scene`: the scene's options (refine_threads 0: one per core).
 nlohmann::json stats_json(const window::ViewerSummary& s, const std::string& renderer,
-                          nlohmann::json loaders, unsigned refine_threads) {
+                          nlohmann::json loaders, const view::SceneOptions& scene) {
+  const unsigned refine_threads = scene.refine_threads;
   nlohmann::json frames = nlohmann::json::array();
   for (const window::ViewerFrame& f : s.frames_list) {
     const lod::Camera& c = f.camera;
@@ -212,6 +221,7 @@ nlohmann::json stats_json(const window::ViewerSummary& s, const std::string& ren
                       {"swap_ms", f.swap_ms},
                       {"present_ms", f.present_ms},
                       {"tiles_uploaded", f.tiles_uploaded},
+                      {"uploads_deferred", f.uploads_deferred},
                       {"page_faults", f.page_faults},
                       {"pixel_error", f.pixel_error},
                       {"speed_factor", f.speed_factor},
@@ -245,6 +255,7 @@ nlohmann::json stats_json(const window::ViewerSummary& s, const std::string& ren
       {"renderer", renderer},
       {"allocator", allocator_description()},
       {"refine_threads", refine_threads ? refine_threads : std::thread::hardware_concurrency()},
+      {"uploads_per_frame", scene.uploads_per_frame},
       {"loaders", std::move(loaders)}};
   return {{"summary", summary}, {"frames", frames}};
 }
@@ -291,6 +302,10 @@ int view_session(const Args& args, RenderSetup& setup) {
   so.loader.max_preparing = std::max(1, static_cast<int>(std::thread::hardware_concurrency()) - 1);
   so.lookahead_frames = 15;  // half a second ahead at 30 fps
   so.on_growth_ahead = prefault_in_background;
+  so.uploads_per_frame = kUploadsPerFrame;
+  auto uploads = args.get_int("--uploads-per-frame", 0, 1 << 20);
+  if (!uploads) return report_error(uploads.error().message);
+  if (*uploads) so.uploads_per_frame = static_cast<uint32_t>(**uploads);
 
   window::WindowOptions wo;
   wo.width = setup.width;
@@ -329,7 +344,7 @@ int view_session(const Args& args, RenderSetup& setup) {
   if (auto path = args.get("--stats")) {
     const std::string text =
         stats_json(*summary, (*window)->renderer(), loaders_json((*viewer)->scene(), so),
-                   (*viewer)->scene().options().refine_threads)
+                   (*viewer)->scene().options())
             .dump(1);
     if (auto st = write_json(*path, text); !st) return report_error(st.error().message);
   }
@@ -342,7 +357,11 @@ int view_session(const Args& args, RenderSetup& setup) {
 }  // namespace
 
 int run_view(const std::vector<std::string>& command_line) {
-  if (wants_help(command_line)) return print_help(help_with_layer_options(kHelp).c_str());
+  if (wants_help(command_line)) {
+    std::string help = help_with_layer_options(kHelp);
+    help.replace(help.find("%UPLOADS%"), 9, std::to_string(kUploadsPerFrame));
+    return print_help(help.c_str());
+  }
   // Layer options repeat and their order matters: taken out first.
   std::vector<std::string> argv = command_line;
   auto layers = take_layer_options(argv);
@@ -361,7 +380,8 @@ int run_view(const std::vector<std::string>& command_line) {
                                               {"--export-movie"},
                                               {"--no-panels", "", false},
                                               {"--no-overlap", "", false},
-                                              {"--no-vsync", "", false}}),
+                                              {"--no-vsync", "", false},
+                                              {"--uploads-per-frame"}}),
                           "view");
   if (!args) return report_error(args.error().message);
   if (args->get("--camera") && args->get("--look-at")) {

@@ -38,9 +38,11 @@ class SceneTest : public ::testing::Test {
   }
 
   std::unique_ptr<Scene> scene(bool interactive, lod::LodMode mode = lod::LodMode::edge_marks,
-                               const tiles::Store* store = nullptr) {
+                               const tiles::Store* store = nullptr,
+                               uint32_t uploads_per_frame = 0) {
     SceneOptions o;
     o.interactive = interactive;
+    o.uploads_per_frame = uploads_per_frame;
     o.selection.mode = mode;
     o.mesh_level = 3;
     auto s = Scene::create(store ? *store : testing::pyrenees_store(), nullptr, o, clock_);
@@ -121,6 +123,41 @@ TEST_F(SceneTest, InteractiveFramesNeverWaitAndConvergeToTheCompleteFrame) {
     ASSERT_TRUE(measured) << measured.error().message;
     EXPECT_GT(measured->samples, 200u);
     EXPECT_LE(measured->max_pixels, 1.0);
+  }
+}
+
+// SceneOptions::uploads_per_frame: when many tiles are resident at once, a
+// frame uploads no more than its budget of them (the first frame also its
+// root tile); the quads that would need more stay whole, the frame says it
+// is not complete and draws more, and the frames still converge to the
+// complete frame, pixel for pixel.
+TEST_F(SceneTest, AFrameUploadsNoMoreNewTilesThanItsBudgetAndStillConverges) {
+  constexpr uint32_t kBudget = 3;
+  for (const lod::LodMode mode : {lod::LodMode::edge_marks, lod::LodMode::quads}) {
+    SCOPED_TRACE(mode == lod::LodMode::quads ? "quads" : "edge marks");
+    auto complete = scene(false, mode);
+    ASSERT_TRUE(complete);
+    auto still = complete->draw(kOblique, *target_);
+    ASSERT_TRUE(still) << still.error().message;
+    const std::vector<uint8_t> expected = *target_->read_rgba();
+
+    auto live = scene(true, mode, nullptr, kBudget);
+    ASSERT_TRUE(live);
+    int frame = 0, deferring = 0;
+    const Converged c = draw_until_complete(*live, kOblique, [&](const FrameReport& f) {
+      EXPECT_LE(f.draw.uploads, kBudget + (frame == 0 ? 1 : 0)) << "frame " << frame;
+      if (f.selection.deferred > 0) {
+        ++deferring;
+        EXPECT_FALSE(f.complete) << "frame " << frame;
+        EXPECT_TRUE(f.draws_more) << "frame " << frame;
+      }
+      ++frame;
+    });
+    EXPECT_GT(deferring, 0);  // the budget held splits back
+    ASSERT_TRUE(c.last && c.last->complete);
+    EXPECT_EQ(*target_->read_rgba(), expected);
+    EXPECT_EQ(c.last->selection.quads, still->selection.quads);
+    EXPECT_EQ(c.last->draw.triangles, still->draw.triangles);
   }
 }
 

@@ -782,6 +782,30 @@ TEST(ViewCommand, TheLoadersWorkersRunAtTheirNiceAndPrepareWithinTheLimit) {
   }
 }
 
+// --uploads-per-frame reaches the scene: no frame of a session uploads more
+// new elevation tiles than asked (the first also its root tile), and the
+// session still ends complete. (Whether a frame has more to upload depends
+// on when the loads end: SceneTest.AFrameUploadsNoMoreNewTilesThanItsBudget-
+// AndStillConverges holds splits back deterministically.)
+TEST(ViewCommand, NoFrameUploadsMoreNewTilesThanAsked) {
+  ScratchDir dir("view_uploads");
+  const auto path = dir / "path.json", stats = dir / "stats.json";
+  write_path(path);
+  auto r =
+      run_relief({"view", store_path(), "--play", path.string(), "--exit-when-done", "--stats",
+                  stats.string(), "--size", "160x120", "--no-vsync", "--uploads-per-frame", "2"},
+                 kNoMesaLeakReport);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json s = read_json(stats);
+  EXPECT_TRUE(s["summary"]["complete"].get<bool>());
+  EXPECT_EQ(s["summary"]["uploads_per_frame"].get<uint32_t>(), 2u);
+  for (const json& f : s["frames"]) {
+    EXPECT_LE(f["tiles_uploaded"].get<uint32_t>(), f["frame"].get<int>() == 0 ? 3u : 2u)
+        << "frame " << f["frame"];
+    EXPECT_TRUE(f.contains("uploads_deferred"));
+  }
+}
+
 TEST(ViewCommand, ARecordedSessionPlaysBackThroughTheSameCameras) {
   ScratchDir dir("view_record");
   const auto path = dir / "path.json", recorded = dir / "recorded.json", stats = dir / "stats.json";
@@ -897,6 +921,8 @@ TEST(ViewCommand, BadInputIsAOneLineError) {
   expect_error(run_relief({"view", store, "--mode", "glider"}), "--mode");
   expect_error(run_relief({"view", store, "--target-fps", "-5"}), "--target-fps");
   expect_error(run_relief({"view", store, "--target-fps", "fast"}), "--target-fps");
+  expect_error(run_relief({"view", store, "--uploads-per-frame", "-1"}), "--uploads-per-frame");
+  expect_error(run_relief({"view", store, "--uploads-per-frame", "many"}), "--uploads-per-frame");
   expect_error(run_relief({"view", store, "--play", not_json.string(), "--mode", "walk"}),
                "--play");
   expect_error(run_relief({"view", store, "--export-movie", (dir / "flight.png").string()}),

@@ -76,6 +76,7 @@ class Selector {
     }
     s.stats.quads = static_cast<uint32_t>(s.quads.size());
     s.stats.waiting = waiting_;
+    s.stats.deferred = deferred_;
     return s;
   }
 
@@ -216,7 +217,15 @@ class Selector {
     for (int c = 0; c < 4; ++c) {
       const TileKey child = key.child(c & 1, c >> 1);
       const DataWindow w = terrain_.window(child);
-      if (!w.tile || terrain_.available(*w.tile)) continue;
+      if (!w.tile) continue;
+      if (terrain_.available(*w.tile)) {
+        if (o_.drawable_now && !terrain_.draws_ancestor(child) &&
+            !culled(*RELIEF_TRY(terrain_.quad(child))) && !o_.drawable_now(*w.tile)) {
+          ++deferred_;
+          all = false;
+        }
+        continue;
+      }
       if (terrain_.draws_ancestor(child)) {
         // An unloaded quad, culled before (its bounds need the tile): only
         // restriction splits it. Lowest priority.
@@ -544,6 +553,7 @@ class Selector {
   QuadMap<Leaf> leaves_;
   std::unordered_set<TileKey, geo::TileKeyHash> frozen_;  // coarsened: stay leaves
   uint32_t waiting_ = 0;                                  // data requested, not resident
+  uint32_t deferred_ = 0;                                 // resident, not drawable_now
 };
 
 }  // namespace

@@ -142,6 +142,24 @@ class GlTerrainRenderer final : public TerrainRenderer {
     on_processed_ = std::move(on_processed);
   }
 
+  bool has_elevation_texture(const TileKey& tile) const override {
+    return slots_.contains({tile, false});
+  }
+
+  Result<FrameStats> preload_elevation(std::span<const TileKey> tiles) override {
+    const auto start = Clock::now();
+    FrameStats stats;
+    gl::Uploads uploads;
+    const uint64_t before = slots_.uploads();
+    for (const TileKey& tile : tiles) {
+      if (!slots_.contains({tile, false})) RELIEF_TRY(height_layer(tile, uploads));
+    }
+    stats.uploads = static_cast<uint32_t>(slots_.uploads() - before);
+    stats.texture_bytes = uploads.textures;
+    stats.prepare_seconds = std::chrono::duration<double>(Clock::now() - start).count();
+    return stats;
+  }
+
   Status set_texture_layers(std::vector<TextureLayer> layers) override {
     if (layers.size() != layers_.size() && !layers_.empty()) {
       return fail(

@@ -81,6 +81,8 @@ class TileSlots {
 
   // The layer of a resident tile, now pinned for this frame.
   std::optional<int> find(const TextureKey& key);
+  // Whether a tile is resident (nothing pinned, nothing reordered).
+  bool contains(const TextureKey& key) const { return entries_.contains(key); }
   // Uploads a tile of `width` x `height` texels (R32F heights, with the
   // slopes made from them, or RGBA8 colours) to a free layer, pinned for this frame, evicting
   // unpinned tiles while over budget and, when no layer is free, reusing the least recently used

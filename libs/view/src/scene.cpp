@@ -84,7 +84,10 @@ struct Scene::Impl {
   uint64_t imagery_misses = 0;                 // a frame that missed imagery is not complete
   std::optional<lod::Camera> prefetch_camera;  // set_prefetch_camera()
   bool frozen = false;                         // set_selection_frozen()
-  bool drawn = false;                          // a frame was drawn: `last` is its selection
+  // SceneOptions::uploads_per_frame: the tiles not on the GPU this frame's
+  // selection admitted (uploaded before it draws).
+  std::vector<geo::TileKey> admitted;
+  bool drawn = false;  // a frame was drawn: `last` is its selection
   // SceneOptions::detect: the SAR layer's store, its hints and their overlay.
   const tiles::Store* hint_store = nullptr;
   std::unique_ptr<TargetHints> hints;
@@ -110,6 +113,18 @@ struct Scene::Impl {
   // The brute-force reference has one vertex per finest sample.
   static int mesh_level(const tiles::Store* s, const SceneOptions& o) {
     return o.full_resolution && s ? static_cast<int>(std::log2(s->grid().height())) : o.mesh_level;
+  }
+
+  // SceneOptions::uploads_per_frame as SelectionOptions::drawable_now: a
+  // tile on the GPU, or one of the first tiles this frame admits.
+  std::function<bool(const geo::TileKey&)> upload_budget() {
+    return [this](const geo::TileKey& tile) {
+      if (renderer->has_elevation_texture(tile)) return true;
+      if (std::find(admitted.begin(), admitted.end(), tile) != admitted.end()) return true;
+      if (admitted.size() >= options.uploads_per_frame) return false;
+      admitted.push_back(tile);
+      return true;
+    };
   }
 
   // Draws `selection` with the texture and imagery loaders taking the
@@ -301,6 +316,8 @@ Result<FrameReport> Scene::draw(const lod::Camera& camera, render::RenderTarget&
   m.terrain->begin_frame();
   lod::SelectionOptions so = m.options.selection;
   if (m.feeds_back()) so.also_split = m.split_feedback.for_selection(view, *m.terrain);
+  m.admitted.clear();
+  if (m.loader && m.options.uploads_per_frame > 0) so.drawable_now = m.upload_budget();
   lod::Selection selection = RELIEF_TRY(lod::select_quads(view, *m.terrain, so));
   RELIEF_CHECK(m.prefetch_along_motion(camera));
   if (m.loader && m.options.radius_tiles > 0) {
@@ -334,16 +351,21 @@ Result<FrameReport> Scene::draw(const lod::Camera& camera, render::RenderTarget&
     report.refine_cache_bytes = m.refine_cache->bytes();
   }
   if (before_drawing) before_drawing();
+  const render::FrameStats preloaded = RELIEF_TRY(m.renderer->preload_elevation(m.admitted));
   report.draw =
       RELIEF_TRY(m.draw_selection(view, selection, target, refined ? &*refined : nullptr));
+  report.draw.uploads += preloaded.uploads;
+  report.draw.texture_bytes += preloaded.texture_bytes;
+  report.draw.prepare_seconds += preloaded.prepare_seconds;
   if (m.hints) RELIEF_CHECK(m.draw_hints(view, selection, target, report, *this));
   report.frame_seconds = seconds_between(start, m.clock.now());
   report.cpu_seconds = report.frame_seconds - report.draw.gpu_seconds;
   report.page_faults = thread_page_faults() - faults_before;
   report.selection = selection.stats;
-  report.complete = selection.stats.waiting == 0 && !wants_more &&
+  report.complete = selection.stats.waiting == 0 && selection.stats.deferred == 0 && !wants_more &&
                     report.draw.texture_misses == 0 && report.hint_tiles_pending == 0;
-  report.draws_more = wants_more || report.draw.layer_tiles_processed > 0;
+  report.draws_more =
+      wants_more || selection.stats.deferred > 0 || report.draw.layer_tiles_processed > 0;
   if (m.imagery_loader) {
     const stream::LoaderStats is = m.imagery_loader->stats();
     report.complete =

@@ -48,6 +48,12 @@ struct SelectionOptions {
   // Fill SelectedQuad::neighbours (for consumers that walk the mesh on the
   // GPU, like the seed's refinement); costs ~0.3 ms per 2000 quads.
   bool neighbour_indices = false;
+  // Interactive frames: whether a resident data tile may be drawn by this
+  // frame (a budget of tiles uploaded to the GPU per frame, view/scene.h).
+  // A quad splits only when the tiles of its visible children may be drawn;
+  // otherwise it stays whole this frame (SelectionStats::deferred), as it
+  // does while they load. Null: every resident tile.
+  std::function<bool(const geo::TileKey& tile)> drawable_now;
 };
 
 struct SelectedQuad {
@@ -79,6 +85,9 @@ struct SelectionStats {
   // Interactive frames: quads drawn coarser than wanted because the data of
   // their children is not resident yet (it was requested).
   uint32_t waiting = 0;
+  // Interactive frames: children's tiles resident but not drawn by this frame
+  // (SelectionOptions::drawable_now); a later frame draws them.
+  uint32_t deferred = 0;
 };
 
 struct Selection {

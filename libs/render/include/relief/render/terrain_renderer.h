@@ -15,6 +15,7 @@
 #include <array>
 #include <functional>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -155,6 +156,14 @@ class TerrainRenderer {
   // array of the GPU cache will allocate, once per size, when it draws near
   // (TileSlots::set_on_growth_ahead): time to make that memory ready.
   virtual void set_on_growth_ahead(std::function<void(uint64_t bytes)> on_growth_ahead) = 0;
+  // Whether an elevation tile's heights are on the GPU: drawing a quad of it
+  // uploads nothing (the budget of new tiles per frame, view/scene.h).
+  virtual bool has_elevation_texture(const geo::TileKey& tile) const = 0;
+  // Uploads those of `tiles` (resident in the elevation model) that are not
+  // on the GPU yet, whether this frame draws them or not: FrameStats::uploads,
+  // texture_bytes and prepare_seconds say what it did. Call it where draw() may be called
+  // (its uploads wait for the GL to be done with the previous frame).
+  virtual Result<FrameStats> preload_elevation(std::span<const geo::TileKey> tiles) = 0;
 };
 
 }  // namespace relief::render

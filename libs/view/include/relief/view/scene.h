@@ -59,6 +59,14 @@ struct SceneOptions {
   // > 0: load every tile within this many tile sizes of the eye instead of by
   // view priority (the radius pager, a baseline for benchmarks).
   double radius_tiles = 0;
+  // Interactive scenes, > 0: a frame draws at most this many elevation tiles
+  // that are not on the GPU yet (it uploads them, ~0.2 ms each with their
+  // slopes on llvmpipe); quads whose children's tiles would pass it stay
+  // whole until a later frame (SelectionStats::deferred; such a frame is not
+  // complete and draws_more). The tiles admitted are uploaded even when the
+  // selection ends up not drawing them, so every frame makes progress.
+  // 0: no budget (a frame where many tiles arrive at once uploads them all).
+  uint32_t uploads_per_frame = 0;
   // Full-resolution mesh (brute force reference; stills only).
   bool full_resolution = false;
   // Texture layers draped instead of the imagery store (which must then be

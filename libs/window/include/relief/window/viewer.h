@@ -115,7 +115,9 @@ struct ViewerFrame {
   // swap without overlap).
   double select_ms = 0, prepare_ms = 0, gpu_ms = 0, submit_ms = 0, swap_ms = 0, present_ms = 0;
   uint32_t tiles_uploaded = 0;  // tile textures uploaded by this frame (L3 misses)
-  uint64_t page_faults = 0;     // on the render thread (view::FrameReport)
+  // Splits held back for the budget of uploads per frame (SelectionStats::deferred).
+  uint32_t uploads_deferred = 0;
+  uint64_t page_faults = 0;  // on the render thread (view::FrameReport)
   // CPU time of the whole process (render, loaders, llvmpipe's threads)
   // over the same period, idle waits included (the loaders work in them):
   // what a frame costs on a shared machine. 0 for the last frame.
