@@ -8,8 +8,10 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <functional>
 #include <optional>
+#include <string>
 #include <thread>
 #include <tuple>
 
@@ -98,24 +100,40 @@ TEST_F(SceneTest, InteractiveFramesNeverWaitAndConvergeToTheCompleteFrame) {
     EXPECT_TRUE(still->complete);
     const std::vector<uint8_t> expected = *target_->read_rgba();
 
-    auto live = scene(true, mode);
-    ASSERT_TRUE(live);
-    auto first = live->draw(kOblique, *target_);
-    ASSERT_TRUE(first) << first.error().message;
-    EXPECT_FALSE(first->complete);  // only level 0 was resident: the rest was requested
-    EXPECT_GT(first->selection.waiting, 0u);
-    std::optional<FrameReport> last;
-    for (int frame = 0; frame < 64 && !(last && last->complete); ++frame) {
-      wait_idle(*live);
-      auto f = live->draw(kOblique, *target_);
-      ASSERT_TRUE(f) << f.error().message;
-      last = *f;
+    // SceneOptions::uploads_per_frame: with a budget, no frame uploads more
+    // new tiles than it allows (the first also its root tile); quads that
+    // would need more stay whole, and such a frame is not complete and draws
+    // more. The frames converge to the complete frame all the same.
+    for (const uint32_t budget : {0u, 3u}) {
+      SCOPED_TRACE(std::to_string(budget) + " uploads per frame");
+      auto live = scene(true, mode, nullptr, budget);
+      ASSERT_TRUE(live);
+      auto first = live->draw(kOblique, *target_);
+      ASSERT_TRUE(first) << first.error().message;
+      EXPECT_FALSE(first->complete);  // only level 0 was resident: the rest was requested
+      EXPECT_GT(first->selection.waiting, 0u);
+      EXPECT_LE(first->draw.uploads, budget ? budget + 1 : UINT32_MAX);
+      std::optional<FrameReport> last;
+      int deferring = 0;
+      for (int frame = 0; frame < 64 && !(last && last->complete); ++frame) {
+        wait_idle(*live);
+        auto f = live->draw(kOblique, *target_);
+        ASSERT_TRUE(f) << f.error().message;
+        EXPECT_LE(f->draw.uploads, budget ? budget : UINT32_MAX);
+        if (f->selection.deferred > 0) {
+          ++deferring;
+          EXPECT_FALSE(f->complete);
+          EXPECT_TRUE(f->draws_more);
+        }
+        last = *f;
+      }
+      EXPECT_EQ(deferring > 0, budget > 0);  // the budget held splits back
+      ASSERT_TRUE(last && last->complete);
+      EXPECT_EQ(*target_->read_rgba(), expected);
+      EXPECT_EQ(last->selection.quads, still->selection.quads);
+      EXPECT_EQ(last->draw.triangles, still->draw.triangles);
+      EXPECT_EQ(last->refine.has_value(), mode == lod::LodMode::edge_marks);
     }
-    ASSERT_TRUE(last && last->complete);
-    EXPECT_EQ(*target_->read_rgba(), expected);
-    EXPECT_EQ(last->selection.quads, still->selection.quads);
-    EXPECT_EQ(last->draw.triangles, still->draw.triangles);
-    EXPECT_EQ(last->refine.has_value(), mode == lod::LodMode::edge_marks);
     // Measured on the drawn mesh, within the threshold (1 px). (The complete
     // frame's scene may read tiles to tell covered samples from nodata; an
     // interactive one leaves out tiles with nodata rather than wait.)
@@ -123,41 +141,6 @@ TEST_F(SceneTest, InteractiveFramesNeverWaitAndConvergeToTheCompleteFrame) {
     ASSERT_TRUE(measured) << measured.error().message;
     EXPECT_GT(measured->samples, 200u);
     EXPECT_LE(measured->max_pixels, 1.0);
-  }
-}
-
-// SceneOptions::uploads_per_frame: when many tiles are resident at once, a
-// frame uploads no more than its budget of them (the first frame also its
-// root tile); the quads that would need more stay whole, the frame says it
-// is not complete and draws more, and the frames still converge to the
-// complete frame, pixel for pixel.
-TEST_F(SceneTest, AFrameUploadsNoMoreNewTilesThanItsBudgetAndStillConverges) {
-  constexpr uint32_t kBudget = 3;
-  for (const lod::LodMode mode : {lod::LodMode::edge_marks, lod::LodMode::quads}) {
-    SCOPED_TRACE(mode == lod::LodMode::quads ? "quads" : "edge marks");
-    auto complete = scene(false, mode);
-    ASSERT_TRUE(complete);
-    auto still = complete->draw(kOblique, *target_);
-    ASSERT_TRUE(still) << still.error().message;
-    const std::vector<uint8_t> expected = *target_->read_rgba();
-
-    auto live = scene(true, mode, nullptr, kBudget);
-    ASSERT_TRUE(live);
-    int frame = 0, deferring = 0;
-    const Converged c = draw_until_complete(*live, kOblique, [&](const FrameReport& f) {
-      EXPECT_LE(f.draw.uploads, kBudget + (frame == 0 ? 1 : 0)) << "frame " << frame;
-      if (f.selection.deferred > 0) {
-        ++deferring;
-        EXPECT_FALSE(f.complete) << "frame " << frame;
-        EXPECT_TRUE(f.draws_more) << "frame " << frame;
-      }
-      ++frame;
-    });
-    EXPECT_GT(deferring, 0);  // the budget held splits back
-    ASSERT_TRUE(c.last && c.last->complete);
-    EXPECT_EQ(*target_->read_rgba(), expected);
-    EXPECT_EQ(c.last->selection.quads, still->selection.quads);
-    EXPECT_EQ(c.last->draw.triangles, still->draw.triangles);
   }
 }
 

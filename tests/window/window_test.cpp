@@ -785,8 +785,8 @@ TEST(ViewCommand, TheLoadersWorkersRunAtTheirNiceAndPrepareWithinTheLimit) {
 // --uploads-per-frame reaches the scene: no frame of a session uploads more
 // new elevation tiles than asked (the first also its root tile), and the
 // session still ends complete. (Whether a frame has more to upload depends
-// on when the loads end: SceneTest.AFrameUploadsNoMoreNewTilesThanItsBudget-
-// AndStillConverges holds splits back deterministically.)
+// on when the loads end; SceneTest.InteractiveFramesNeverWaitAndConvergeTo-
+// TheCompleteFrame holds splits back deterministically.)
 TEST(ViewCommand, NoFrameUploadsMoreNewTilesThanAsked) {
   ScratchDir dir("view_uploads");
   const auto path = dir / "path.json", stats = dir / "stats.json";
