@@ -42,16 +42,17 @@ void slopes_clamped(std::span<const float> heights, int width, int height, int y
 }
 
 #if defined(__x86_64__) || defined(__i386__)
-// Eight samples of an interior row at a time: the same differences, and
-// F16C's conversion, which rounds to nearest even as to_half() does; what
-// to_half() does besides (saturation at 65504, NaN to 0) is done first, so
-// every half is bit for bit to_half()'s. Returns the first x not done.
+// Eight to_half()s at once: F16C's conversion rounds to nearest even as
+// to_half() does, and what to_half() does besides (saturation at 65504, NaN
+// to 0) is done first, so every half is bit for bit to_half()'s.
 __attribute__((target("avx2,f16c"))) inline __m128i halves(__m256 v) {
   v = _mm256_and_ps(v, _mm256_cmp_ps(v, v, _CMP_ORD_Q));  // NaN: +0
   v = _mm256_min_ps(_mm256_max_ps(v, _mm256_set1_ps(-65504.0f)), _mm256_set1_ps(65504.0f));
   return _mm256_cvtps_ph(v, _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC);
 }
 
+// An interior row's slopes eight samples at a time, from x = 1 while eight
+// are left before the last sample: the first x not done.
 __attribute__((target("avx2,f16c"))) int slopes_row_f16c(const float* above, const float* row,
                                                          const float* below, int width,
                                                          uint16_t* out) {
