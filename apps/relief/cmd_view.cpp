@@ -80,8 +80,11 @@ options:
   --uploads-per-frame N  a frame uploads at most N elevation tiles new to the
                      GPU; quads needing more wait for the next frames
                      (default %UPLOADS%; 0: no limit)
-  --fov, --exaggeration, --lod, --sky, --gpu-budget, --cache, --cache-size,
-  --loader-nice      as relief render
+  --loader-nice N    run the tile loaders N nice levels below the render thread
+                     (0-19, default %NICE%: frames first; 0 on a machine shared
+                     with work that would starve them; docs/streaming.md)
+  --fov, --exaggeration, --lod, --sky, --gpu-budget, --cache, --cache-size
+                     as relief render
   --refine-threads N as relief render; by default one per core, but the
                      render thread alone on a software rasteriser (llvmpipe)
                      with overlap: its cores rasterise the previous frame
@@ -92,6 +95,14 @@ options:
 // uploads_per_frame): ~0.2 ms each on llvmpipe with their slopes, and in
 // bench/view's flights up to 76 arrived in one frame (docs/viewer.md).
 constexpr uint32_t kUploadsPerFrame = 16;
+
+// Nice levels the viewer's loaders run below its render thread unless
+// --loader-nice says otherwise: decoding and preparing tiles take the cores
+// from the frame (and from llvmpipe's rasteriser) in bursts. On bench/view's
+// Himalaya flight at 2 px the p99 frame fell from 63 to 50 ms (48 at nice
+// 19, which would leave the loads a background build's leftovers), fps p50
+// within the runs' spread (docs/streaming.md, "In flight").
+constexpr int kViewerLoaderNice = 10;
 
 // An output written at exit must be writable now, not after a long session.
 Status check_writable(const char* option, const std::string& path) {
@@ -360,6 +371,7 @@ int run_view(const std::vector<std::string>& command_line) {
   if (wants_help(command_line)) {
     std::string help = help_with_layer_options(kHelp);
     help.replace(help.find("%UPLOADS%"), 9, std::to_string(kUploadsPerFrame));
+    help.replace(help.find("%NICE%"), 6, std::to_string(kViewerLoaderNice));
     return print_help(help.c_str());
   }
   // Layer options repeat and their order matters: taken out first.
@@ -396,6 +408,7 @@ int run_view(const std::vector<std::string>& command_line) {
   }
   auto setup = parse_render_setup(*args, std::move(layers->textures), std::move(layers->elevation));
   if (!setup) return report_error(setup.error().message);
+  if (!args->get("--loader-nice")) setup->loader_nice = kViewerLoaderNice;
   keep_freed_memory();
   prefault_frame_heap(kFrameHeapBytes);
   return view_session(*args, *setup);

@@ -757,25 +757,28 @@ TEST(ViewCommand, PlaysAPathWithoutInputAndWritesTheStatisticsOfEveryFrame) {
 }
 
 // The loaders' settings reach their workers: every loader thread runs
-// --loader-nice levels below the render thread (as the kernel reports it),
-// and no more workers prepare tiles at once than relief view allows (one
-// less than the cores, at least one).
+// --loader-nice levels below the render thread (as the kernel reports it;
+// 10 when not given: the viewer puts its frames first), and no more workers
+// prepare tiles at once than relief view allows (one less than the cores, at
+// least one).
 TEST(ViewCommand, TheLoadersWorkersRunAtTheirNiceAndPrepareWithinTheLimit) {
   ScratchDir dir("view_loaders");
   const auto path = dir / "path.json";
   write_path(path);
   const int cores = static_cast<int>(std::thread::hardware_concurrency());
-  for (const int nice : {0, 7}) {
+  for (const int nice : {-1, 0, 7}) {  // -1: not given
     const auto stats = dir / fmt::format("stats{}.json", nice);
-    auto r = run_relief(
-        {"view", store_path(), "--play", path.string(), "--exit-when-done", "--stats",
-         stats.string(), "--size", "160x120", "--no-vsync", "--loader-nice", std::to_string(nice)},
-        kNoMesaLeakReport);
+    std::vector<std::string> args = {
+        "view",    store_path(),   "--play", path.string(), "--exit-when-done",
+        "--stats", stats.string(), "--size", "160x120",     "--no-vsync"};
+    if (nice >= 0) args.insert(args.end(), {"--loader-nice", std::to_string(nice)});
+    auto r = run_relief(args, kNoMesaLeakReport);
     ASSERT_EQ(r.exit_code, 0) << r.err;
     const json loaders = read_json(stats)["summary"]["loaders"];
     const int own = loaders["render_thread_nice"].get<int>();
     ASSERT_FALSE(loaders["worker_nice"].empty()) << "no thread named relief-loader";
-    for (const json& n : loaders["worker_nice"]) EXPECT_EQ(n.get<int>(), std::min(19, own + nice));
+    const int below = nice >= 0 ? nice : 10;
+    for (const json& n : loaders["worker_nice"]) EXPECT_EQ(n.get<int>(), std::min(19, own + below));
     EXPECT_EQ(loaders["max_preparing"].get<int>(), std::max(1, cores - 1));
     EXPECT_GE(loaders["most_preparing"].get<int>(), 1) << "tiles were prepared";
     EXPECT_LE(loaders["most_preparing"].get<int>(), std::max(1, cores - 1));
