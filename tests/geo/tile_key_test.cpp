@@ -53,6 +53,10 @@ TEST(TileKey, NeighboursWrapAcrossTheAntimeridian) {
   EXPECT_FALSE((TileKey{3, 4, 0}).neighbour(0, -1).has_value());
   EXPECT_FALSE((TileKey{3, 4, 7}).neighbour(0, 1).has_value());
   EXPECT_EQ((TileKey{0, 0, 0}).neighbour(1, 0), (TileKey{0, 0, 0}));
+  // More than once around, either way.
+  EXPECT_EQ((TileKey{3, 1, 2}).neighbour(-9, 0), (TileKey{3, 0, 2}));
+  EXPECT_EQ((TileKey{3, 1, 2}).neighbour(17, -2), (TileKey{3, 2, 0}));
+  EXPECT_EQ((TileKey{30, 5, 9}).neighbour(-6, 0), (TileKey{30, (1u << 30) - 1, 9}));
 }
 
 TEST(TileKey, MortonRoundTripAndOrder) {
