@@ -58,8 +58,10 @@ options:
   --pixel-error E    largest screen-space error in pixels when still (default 1)
   --no-speed-lod     do not relax the pixel error while the view moves
   --target-fps F     while the view moves and frames take longer than 1/F s,
-                     relax the pixel error further, up to 3 times (default 0:
-                     never; a still view is always drawn at --pixel-error)
+                     relax the pixel error further, up to 3 times; while they
+                     are well within it, relax it less than the speed would,
+                     down to --pixel-error (default 0: no budget; a still view
+                     is always drawn at --pixel-error)
   --play PATH.json   play a camera path (the JSON that relief render --path reads)
   --exit-when-done   quit once the path has ended (at once without --play) and a
                      frame is complete, or --until-complete seconds later

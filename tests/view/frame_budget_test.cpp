@@ -1,7 +1,8 @@
 // The frame budget: frames over it relax the threshold while the view
 // moves, by their overrun but at most max_step per frame and max_factor in
-// all; frames well within it bring it back; a still view returns to exactly
-// the threshold given; no budget, no relaxation.
+// all; frames well within it bring it back, and below the speed's
+// relaxation down to the floor it is given, never further; a still view
+// returns to exactly the threshold given; no budget, no relaxation.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -53,6 +54,30 @@ TEST(FrameBudget, FastFramesBringItBackSlowlyAStillViewQuicklyAndExactly) {
   EXPECT_LT(frames, 60);
   EXPECT_EQ(budget.factor(), 1);
   EXPECT_EQ(budget.update(500, kDt, false), 1);
+}
+
+TEST(FrameBudget, FastFramesTightenTheSpeedsRelaxationDownToTheFloorNeverBelow) {
+  FrameBudget budget(thirty_fps());
+  // The speed relaxes the threshold 4 times: the floor is a quarter.
+  constexpr double kFloor = 0.25;
+  double previous = 1;
+  for (int i = 0; i < 30; ++i) {
+    const double f = budget.update(10, kDt, true, kFloor);
+    ASSERT_LT(f, previous);
+    ASSERT_GE(f, kFloor);
+    previous = f;
+  }
+  // One second of fast frames: 1 s time constant towards the floor.
+  EXPECT_NEAR(previous, kFloor + (1 - kFloor) * std::exp(-1.0), 1e-9);
+  for (int i = 0; i < 600; ++i) budget.update(10, kDt, true, kFloor);
+  EXPECT_NEAR(budget.factor(), kFloor, 1e-9);
+  // The speed's relaxation falls to 2: the floor rises to a half at once.
+  EXPECT_EQ(budget.update(10, kDt, true, 0.5), 0.5);
+  // Frames in the band hold it; a slow one relaxes it from there.
+  EXPECT_EQ(budget.update(30, kDt, true, 0.5), 0.5);
+  EXPECT_NEAR(budget.update(40, kDt, true, 0.5), 0.5 * 1.2, 1e-12);
+  // A still view: exactly 1 at once from below (the still threshold).
+  EXPECT_EQ(budget.update(10, kDt, false, 0.5), 1);
 }
 
 TEST(FrameBudget, NoBudgetNeverRelaxes) {

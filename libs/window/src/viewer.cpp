@@ -303,8 +303,9 @@ Result<bool> Viewer::frame() {
       still, dt, v.controller->angular_speed(), v.controller->linear_speed(), std::max(above, 1.0));
   // Moving: the controller's speeds, as the speed's relaxation sees them.
   const bool moving = v.controller->angular_speed() != 0 || v.controller->linear_speed() != 0;
-  const double budget = v.frame_budget.update(v.last_frame_ms, dt, moving);
-  v.threshold = budget == 1 ? speed_threshold : speed_threshold * budget;
+  // The budget may tighten the speed's relaxation, never the still threshold.
+  const double budget = v.frame_budget.update(v.last_frame_ms, dt, moving, still / speed_threshold);
+  v.threshold = budget == 1 ? speed_threshold : std::max(still, speed_threshold * budget);
   v.scene->set_pixel_error(v.threshold);
   // The previous frame, if its swap was left to this one: swapped once this
   // frame's selection and refinement are made (they ran while the GL drew it).

@@ -2,9 +2,12 @@
 // A frame-time budget for a moving view: while the view moves and its
 // frames take longer than the budget, the pixel-error threshold relaxes
 // further, on top of the speed's relaxation (speed_lod.h), until they fit;
-// it comes back while frames are well within the budget, and returns to
-// exactly 1 when the view stops, so the still frame is the complete one at
-// the still threshold (a still view is never coarsened for speed).
+// while frames are well within the budget it tightens, below the speed's
+// relaxation if the time allows but never below the still threshold (the
+// caller's `floor`), so a moving view holds the frame rate asked for with
+// the finest detail that fits in it; it returns to exactly 1 when the view
+// stops, so the still frame is the complete one at the still threshold (a
+// still view is never coarsened for speed).
 //
 // The factor moves multiplicatively by the frame's overrun, capped per
 // frame: the frame time falls slowly with the threshold (on llvmpipe the
@@ -30,8 +33,9 @@ class FrameBudget {
   explicit FrameBudget(const FrameBudgetOptions& options = {}) : options_(options) {}
   // The factor for the next frame, `dt` seconds after the previous one,
   // which took `frame_ms` (0: not known, nothing changes), the view moving
-  // or not.
-  double update(double frame_ms, double dt, bool moving);
+  // or not. `floor` (at most 1) is the smallest factor fast frames may
+  // bring it to: the still threshold over the threshold it multiplies.
+  double update(double frame_ms, double dt, bool moving, double floor = 1);
   double factor() const { return factor_; }
   const FrameBudgetOptions& options() const { return options_; }
 
