@@ -1,6 +1,7 @@
 // The frame-time budget's factor: up at once by the overrun (capped), down
 // exponentially towards the floor while frames are well within the budget
-// and towards 1 while the view is still, snapping to exactly 1 near it.
+// and towards 1 while the view is still, snapping to exactly 1 when it
+// comes back to it from above.
 #include "relief/view/frame_budget.h"
 
 #include <algorithm>
@@ -20,7 +21,7 @@ double towards(double target, double factor, double dt, double seconds) {
 
 double FrameBudget::update(double frame_ms, double dt, bool moving, double floor) {
   const FrameBudgetOptions& o = options_;
-  floor = std::clamp(floor, kSnap, 1.0);
+  floor = std::clamp(floor, kSnap, 1.0);  // a factor of 0 would be no threshold at all
   if (o.target_ms <= 0) {
     factor_ = 1;
   } else if (!moving) {

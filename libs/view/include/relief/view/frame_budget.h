@@ -24,7 +24,7 @@ struct FrameBudgetOptions {
   double over = 1.1;            // frames longer than over * target relax the threshold
   double under = 0.85;          // frames shorter than under * target tighten it
   double max_step = 1.3;        // the most one frame relaxes it by
-  double recover_seconds = 1;   // time constant of the return while frames fit
+  double recover_seconds = 1;   // time constant towards the floor while frames are fast
   double settle_seconds = 0.3;  // of the return when the view stops
 };
 

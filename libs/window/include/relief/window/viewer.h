@@ -36,8 +36,9 @@ struct ViewerOptions {
   view::ControllerOptions controller;  // playback: the path
   view::SpeedLodOptions speed_lod;
   // While the view moves, frames over this budget relax the threshold
-  // further (view/frame_budget.h); a still view is drawn at the still
-  // threshold whatever it costs. target_ms 0: no budget.
+  // further and frames well within it relax it less than the speed does,
+  // never below the still threshold (view/frame_budget.h); a still view is
+  // drawn at the still threshold whatever it costs. target_ms 0: no budget.
   view::FrameBudgetOptions frame_budget;
   // Scripted sessions: quit once the path has ended (at once without one)
   // and a frame is complete, or `until_complete` seconds after it ended.
