@@ -1,12 +1,20 @@
 // The relief executable links jemalloc (RELIEF_JEMALLOC, docs/building.md,
-// "Allocator"). A build touches about as many fresh pages as its peak
-// resident size, and on this project's virtual machines each 4 KiB page
-// fault is expensive: with transparent huge pages the same bytes take about
-// a thirtieth of the faults, and `relief build` a sixth less CPU time.
-// glibc's malloc can do the same only through an environment variable read
-// at start-up (GLIBC_TUNABLES=glibc.malloc.hugetlb=1); jemalloc reads this
-// symbol, so the choice is part of the program, not of its environment
-// (MALLOC_CONF still overrides it).
+// "Allocator") for what the frame loop asks of its heap: freed memory kept
+// (keep_freed_memory), the frames' heap faulted in before the first frame
+// (prefault_frame_heap) and blocks faulted in ahead on a helper thread in
+// the render thread's arena (prefault_in_background).
+//
+// The page size is left to the system (thp:default: huge pages only where
+// the kernel gives them to all memory). Asking for 2 MiB pages always (the
+// setting until 2026-12-06) made a still of the Himalaya block 2.4x slower
+// and its build 1.6x on this project's virtual machines, whose host backs
+// a fresh huge page slowly (bench/allocator). On 4 KiB pages two settings
+// keep the frames' heap faulted in: a free block of any size may serve a
+// small request (lg_extent_max_active_fit: jemalloc's default lets a free
+// block serve a request at most 64 times smaller, so the 1 MiB blocks of
+// prefault_frame_heap never served the frames' small slabs, which took
+// fresh pages frame after frame), and jemalloc's own metadata, a few MiB,
+// stays on huge pages. MALLOC_CONF still overrides it all.
 #include <algorithm>
 #include <atomic>
 #include <condition_variable>
@@ -29,7 +37,7 @@
 
 // jemalloc looks this symbol up by name when it starts.
 extern "C" const char* malloc_conf;
-const char* malloc_conf = "thp:always,metadata_thp:auto";
+const char* malloc_conf = "thp:default,metadata_thp:always,lg_extent_max_active_fit:12";
 
 namespace relief::cli {
 
