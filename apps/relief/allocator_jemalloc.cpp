@@ -6,8 +6,8 @@
 //
 // The page size is left to the system (thp:default: huge pages only where
 // the kernel gives them to all memory). Asking for 2 MiB pages always (the
-// setting until 2026-12-06) made a still of the Himalaya block 2.4x slower
-// and its build 1.6x on this project's virtual machines, whose host backs
+// setting until 2026-12-06) made a still of the Himalaya block 2.4-3.8x slower
+// and its build 1.5-1.6x on this project's virtual machines, whose host backs
 // a fresh huge page slowly (bench/allocator). On 4 KiB pages two settings
 // keep the frames' heap faulted in: a free block of any size may serve a
 // small request (lg_extent_max_active_fit: jemalloc's default lets a free
