@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <thread>
@@ -60,8 +61,9 @@ options:
   --target-fps F     while the view moves and frames take longer than 1/F s,
                      relax the pixel error further, up to 3 times; while they
                      are well within it, relax it less than the speed would,
-                     down to --pixel-error (default 0: no budget; a still view
-                     is always drawn at --pixel-error)
+                     down to --pixel-error (default 30; 0: no budget, only the
+                     speed relaxes it; a still view is always drawn at
+                     --pixel-error)
   --play PATH.json   play a camera path (the JSON that relief render --path reads)
   --exit-when-done   quit once the path has ended (at once without --play) and a
                      frame is complete, or --until-complete seconds later
@@ -105,6 +107,15 @@ constexpr uint32_t kUploadsPerFrame = 16;
 // 19, which would leave the loads a background build's leftovers), fps p50
 // within the runs' spread (docs/streaming.md, "In flight").
 constexpr int kViewerLoaderNice = 10;
+
+// The frame rate the viewer holds while the view moves unless --target-fps
+// says otherwise (docs/viewer.md, "Frame budget"). Without it the slowest
+// frames of a flight are stretches whose fixed threshold asks for 2-3 times
+// the median's triangles: bench/view's flights at 2 px had p99 at 1.85-1.87
+// times p50; with it 1.43-1.49. A still view is drawn at --pixel-error
+// either way, and a budget met with time to spare tightens the threshold
+// back towards it.
+constexpr double kDefaultTargetFps = 30;
 
 // An output written at exit must be writable now, not after a long session.
 Status check_writable(const char* option, const std::string& path) {
@@ -181,10 +192,12 @@ Result<window::ViewerOptions> viewer_options(const Args& args, const RenderSetup
     o.record_fps = path.fps;
   }
   o.speed_lod.enabled = !args.has("--no-speed-lod");
+  double target_fps = kDefaultTargetFps;
   if (auto fps = RELIEF_TRY(args.get_double("--target-fps"))) {
     if (!(*fps >= 0 && *fps <= 1000)) return fail("--target-fps: must be in [0, 1000]");
-    o.frame_budget.target_ms = *fps > 0 ? 1e3 / *fps : 0;
+    target_fps = *fps;
   }
+  o.frame_budget.target_ms = target_fps > 0 ? 1e3 / target_fps : 0;
   o.exit_when_done = args.has("--exit-when-done");
   if (auto s = RELIEF_TRY(args.get_double("--until-complete"))) {
     if (!(*s >= 0 && *s <= 3600)) return fail("--until-complete: must be in [0, 3600] s");
@@ -216,9 +229,17 @@ nlohmann::json loaders_json(view::Scene& scene, const view::SceneOptions& so) {
   return j;
 }
 
+// The frame budget's rate at the start of the session, as given (the budget
+// keeps a period: 1e3 / (1e3 / 30) is not 30 in floating point).
+double target_fps(const window::ViewerOptions& viewer) {
+  const double ms = viewer.frame_budget.target_ms;
+  return ms > 0 ? std::round(1e9 / ms) / 1e6 : 0.0;
+}
+
 // `scene`: the scene's options (refine_threads 0: one per core).
 nlohmann::json stats_json(const window::ViewerSummary& s, const std::string& renderer,
-                          nlohmann::json loaders, const view::SceneOptions& scene) {
+                          nlohmann::json loaders, const view::SceneOptions& scene,
+                          const window::ViewerOptions& viewer) {
   const unsigned refine_threads = scene.refine_threads;
   nlohmann::json frames = nlohmann::json::array();
   for (const window::ViewerFrame& f : s.frames_list) {
@@ -269,6 +290,7 @@ nlohmann::json stats_json(const window::ViewerSummary& s, const std::string& ren
       {"allocator", allocator_description()},
       {"refine_threads", refine_threads ? refine_threads : std::thread::hardware_concurrency()},
       {"uploads_per_frame", scene.uploads_per_frame},
+      {"target_fps", target_fps(viewer)},
       {"loaders", std::move(loaders)}};
   return {{"summary", summary}, {"frames", frames}};
 }
@@ -357,7 +379,7 @@ int view_session(const Args& args, RenderSetup& setup) {
   if (auto path = args.get("--stats")) {
     const std::string text =
         stats_json(*summary, (*window)->renderer(), loaders_json((*viewer)->scene(), so),
-                   (*viewer)->scene().options())
+                   (*viewer)->scene().options(), *options)
             .dump(1);
     if (auto st = write_json(*path, text); !st) return report_error(st.error().message);
   }

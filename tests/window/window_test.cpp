@@ -779,6 +779,7 @@ TEST(ViewCommand, PlaysAPathWithoutInputAndWritesTheStatisticsOfEveryFrame) {
   EXPECT_TRUE(s["summary"]["path_finished"]);
   EXPECT_TRUE(s["summary"]["complete"]);
   EXPECT_GT(s["summary"]["fps_p50"].get<double>(), 0);
+  EXPECT_EQ(s["summary"]["target_fps"], 30) << "the viewer's frame budget by default";
   EXPECT_EQ(frames[0]["camera"][0], 1.40);
   EXPECT_EQ(frames.back()["camera"][0], 1.45) << "the last frames show the path's end";
   EXPECT_GE(frames.back()["time"].get<double>(), 0.6);
@@ -855,15 +856,23 @@ TEST(ViewCommand, ARecordedSessionPlaysBackThroughTheSameCameras) {
   ASSERT_GE(keys.size(), 2u);
   EXPECT_EQ(rec["fps"], 30);
   EXPECT_EQ(keys[0]["camera"][0], 1.40);
+  // Played back without a frame budget: the threshold is the speed's alone.
   r = run_relief({"view", store_path(), "--play", recorded.string(), "--exit-when-done", "--stats",
-                  stats.string(), "--size", "160x120", "--no-vsync"},
+                  stats.string(), "--size", "160x120", "--no-vsync", "--target-fps", "0"},
                  kNoMesaLeakReport);
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  const json frames = read_json(stats)["frames"];
+  const json played = read_json(stats);
+  const json& frames = played["frames"];
   ASSERT_GE(frames.size(), 2u);
   for (int i = 0; i < 6; ++i) {  // the first and the last camera, exactly
     EXPECT_EQ(frames[0]["camera"][i], keys[0]["camera"][i]);
     EXPECT_EQ(frames.back()["camera"][i], keys.back()["camera"][i]);
+  }
+  EXPECT_EQ(played["summary"]["target_fps"], 0);
+  for (const json& f : frames) {
+    EXPECT_EQ(f["budget_factor"], 1) << "frame " << f["frame"];
+    EXPECT_DOUBLE_EQ(f["pixel_error"].get<double>(), f["speed_factor"].get<double>())
+        << "frame " << f["frame"];  // times the still threshold, 1
   }
 }
 
