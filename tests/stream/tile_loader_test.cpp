@@ -230,6 +230,30 @@ TEST_F(TileLoaderTest, StaleRequestsAreCancelled) {
   EXPECT_EQ(l.stats().cancelled, 5u);
 }
 
+// end_frame() wakes a worker per tile it queued, up to the workers, and none
+// for a frame that queued nothing (each woken worker takes a core from the
+// frame); the tiles queued while every worker was busy still load.
+TEST_F(TileLoaderTest, FramesWakeAWorkerPerQueuedTileAndNoneForNothing) {
+  open(100ms);
+  stream::TileLoader& l = loader({.max_in_flight = 4});
+  const auto keys = finest();
+  ASSERT_GE(keys.size(), 11u);
+  frame({{keys[0], 1}});
+  EXPECT_EQ(l.stats().woken, 1u);
+  ASSERT_TRUE(clock_.wait_for_sleepers(1));  // in flight, waiting for the link
+  frame({{keys[0], 1}});                     // loading: nothing to queue
+  frame({});
+  EXPECT_EQ(l.stats().woken, 1u);
+  std::vector<std::pair<TileKey, double>> more;
+  for (size_t i = 0; i < 10; ++i) more.emplace_back(keys[i + 1], 1.0 + static_cast<double>(i));
+  frame(more);  // ten queued, three workers idle: all four notified
+  EXPECT_EQ(l.stats().woken, 5u);
+  set_free(true);
+  wait_idle();
+  EXPECT_EQ(recorder_.keys(TileEventKind::Loaded).size(), 11u);
+  EXPECT_EQ(l.stats().woken, 5u);
+}
+
 TEST_F(TileLoaderTest, BudgetHoldsAndPinnedTilesStay) {
   tiles::Store& store = open(0ms);
   const auto keys = finest();

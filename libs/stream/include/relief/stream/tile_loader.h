@@ -86,6 +86,7 @@ struct LoaderStats {
   uint64_t bytes_fetched = 0;                  // tile file bytes read from the source
   uint64_t prefetched = 0, prefetch_used = 0;  // loaded by prefetch; of those, later drawn
   uint32_t most_preparing = 0;  // the most workers in the Prepare step at once, so far
+  uint64_t woken = 0;           // workers end_frame() woke: at most one per tile queued
 };
 
 class TileLoader final : public lod::TileProvider {
