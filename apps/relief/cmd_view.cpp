@@ -111,8 +111,8 @@ constexpr int kViewerLoaderNice = 10;
 // The frame rate the viewer holds while the view moves unless --target-fps
 // says otherwise (docs/viewer.md, "Frame budget"). Without it the slowest
 // frames of a flight are stretches whose fixed threshold asks for 2-3 times
-// the median's triangles: bench/view's flights at 2 px had p99 at 1.85-1.87
-// times p50; with it 1.43-1.49. A still view is drawn at --pixel-error
+// the median's triangles: bench/view's flights at 2 px had p99 at 1.79-1.84
+// times p50 on 2026-12-07; with it 1.42-1.46. A still view is drawn at --pixel-error
 // either way, and a budget met with time to spare tightens the threshold
 // back towards it.
 constexpr double kDefaultTargetFps = 30;
