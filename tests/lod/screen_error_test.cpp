@@ -112,6 +112,48 @@ TEST(ScreenError, FallsTowardsZeroSeenFromAboveAndIsTheDistanceBoundAtGrazingAng
   EXPECT_LT(bound, 2.5 * plain_far);
 }
 
+// The sine and cosine bounds come from angle-sum identities (one sincos per
+// quad): they equal those of the angle range itself, [centre - spread, centre
+// + spread] clamped to [0, pi], for quads of every size all around views of
+// every kind, including a range holding the right angle and ranges clamped at
+// either end.
+TEST(ScreenError, AngleBoundsEqualThoseOfTheClampedAngleRange) {
+  constexpr double kDeg = 3.14159265358979323846 / 180, kPi = 3.14159265358979323846;
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> unit(0, 1);
+  int checked = 0, holding_right_angle = 0, clamped = 0;
+  for (const Case& c : kCases) {
+    auto view = make_view(c.camera);
+    ASSERT_TRUE(view) << c.name;
+    for (int i = 0; i < 400; ++i) {
+      const int level = 2 + static_cast<int>(unit(rng) * 14);
+      const double size = 180.0 / (1 << level);
+      const double lon = c.camera.lon + (unit(rng) - 0.5) * 8;
+      const double lat = std::min(c.camera.lat + (unit(rng) - 0.5) * 8, 90 - size);
+      const geo::GeoBox area{lon, lat, lon + size, lat + size};
+      // Far below the eye, so no corner is behind it and the bounds are computed.
+      const Box box = box_of(area, -20000, -10000);
+      const VerticalErrorParts e = vertical_error_parts(*view, box, area, 10);
+      if (e.behind) continue;
+      const double centre = std::acos(
+          std::clamp(dot(up_at(lon + size / 2, lat + size / 2), view->forward), -1.0, 1.0));
+      const double spread = size * kDeg;
+      const double lo = std::max(0.0, centre - spread), hi = std::min(kPi, centre + spread);
+      const bool right = lo <= kPi / 2 && hi >= kPi / 2;
+      const double s = right ? 1.0 : std::max(std::sin(lo), std::sin(hi));
+      const double co = std::max(std::abs(std::cos(lo)), std::abs(std::cos(hi)));
+      EXPECT_NEAR(e.sin_bound, s, 1e-9) << c.name << " " << lon << " " << lat << " " << level;
+      EXPECT_NEAR(e.cos_bound, co, 1e-9) << c.name << " " << lon << " " << lat << " " << level;
+      ++checked;
+      holding_right_angle += right;
+      clamped += lo == 0 || hi == kPi;
+    }
+  }
+  EXPECT_GT(checked, 1000);
+  EXPECT_GT(holding_right_angle, 10);
+  EXPECT_GT(clamped, 10);
+}
+
 TEST(ScreenError, TheDistanceBoundAloneIsExceededAtTheScreensEdge) {
   // A vertical segment at the left edge of a 16:9 view, level with the eye:
   // it moves f·δ/(d·cos φ) pixels, more than δK/d.

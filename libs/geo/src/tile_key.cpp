@@ -26,17 +26,6 @@ TileKey TileKey::child(int cx, int cy) const {
   return {level + 1, x * 2 + static_cast<uint32_t>(cx), y * 2 + static_cast<uint32_t>(cy)};
 }
 
-std::optional<TileKey> TileKey::neighbour(int dx, int dy) const {
-  const int64_t n = tiles_per_side(level);
-  const int64_t ny = static_cast<int64_t>(y) + dy;
-  if (ny < 0 || ny >= n) return std::nullopt;
-  // n is a power of two: the mask wraps columns on either side (a modulo
-  // that is never negative) without the two 64-bit divisions of `%`; the
-  // quad selection calls this in its innermost loops (~5 % of its time).
-  const int64_t nx = (static_cast<int64_t>(x) + dx) & (n - 1);
-  return TileKey{level, static_cast<uint32_t>(nx), static_cast<uint32_t>(ny)};
-}
-
 namespace {
 uint64_t spread_bits(uint32_t v) {
   uint64_t x = v;

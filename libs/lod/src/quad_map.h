@@ -3,6 +3,7 @@
 // detail selection: a few thousand leaves, probed ~100 000 times per frame.
 // Linear probing over packed keys, tombstones for erased entries, no
 // allocation per insert.
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -16,6 +17,12 @@ class QuadMap {
   explicit QuadMap(size_t capacity_hint = 4096) { rehash(capacity_hint * 2); }
 
   size_t size() const { return size_; }
+
+  // Empties the map, keeping its slots (no allocation on the next fills).
+  void clear() {
+    std::fill(keys_.begin(), keys_.end(), kEmpty);
+    size_ = used_ = 0;
+  }
 
   Value* find(const geo::TileKey& k) {
     const uint64_t p = pack(k);
@@ -53,6 +60,16 @@ class QuadMap {
     }
   }
 
+  // Keys packed into 64 bits, ordered as TileKey's comparison orders them
+  // (level, x, y).
+  static uint64_t pack(const geo::TileKey& k) {
+    return static_cast<uint64_t>(k.level) << 58 | static_cast<uint64_t>(k.x) << 29 | k.y;
+  }
+  static geo::TileKey unpack(uint64_t p) {
+    return {static_cast<int>(p >> 58), static_cast<uint32_t>((p >> 29) & ((1u << 29) - 1)),
+            static_cast<uint32_t>(p & ((1u << 29) - 1))};
+  }
+
   template <class F>
   void for_each(F f) const {
     for (size_t i = 0; i < keys_.size(); ++i) {
@@ -62,13 +79,6 @@ class QuadMap {
 
  private:
   static constexpr uint64_t kEmpty = ~uint64_t{0}, kTombstone = ~uint64_t{0} - 1;
-  static uint64_t pack(const geo::TileKey& k) {
-    return static_cast<uint64_t>(k.level) << 58 | static_cast<uint64_t>(k.x) << 29 | k.y;
-  }
-  static geo::TileKey unpack(uint64_t p) {
-    return {static_cast<int>(p >> 58), static_cast<uint32_t>((p >> 29) & ((1u << 29) - 1)),
-            static_cast<uint32_t>(p & ((1u << 29) - 1))};
-  }
   size_t slot(uint64_t p) const {
     p ^= p >> 33;
     p *= 0xff51afd7ed558ccdULL;

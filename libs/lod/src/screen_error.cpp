@@ -11,21 +11,50 @@ constexpr double kDegree = 3.14159265358979323846 / 180;
 constexpr double kHalfPi = 3.14159265358979323846 / 2;
 
 // Largest |sin| and |cos| of the angle between the view direction and any
-// geodetic normal of `area`: the normals lie within `spread` radians of the
-// centre's (half the box's extent along a meridian plus along a parallel).
-void angle_bounds(const View& view, const geo::GeoBox& area, double& s, double& c) {
-  const double lon = (area.west + area.east) / 2, lat = (area.south + area.north) / 2;
-  const double centre = std::acos(std::clamp(dot(up_at(lon, lat), view.forward), -1.0, 1.0));
-  const double spread = (area.width() + area.height()) / 2 * kDegree;
-  const double lo = std::max(0.0, centre - spread), hi = std::min(2 * kHalfPi, centre + spread);
-  s = lo <= kHalfPi && hi >= kHalfPi ? 1.0 : std::max(std::sin(lo), std::sin(hi));
-  c = std::max(std::abs(std::cos(lo)), std::abs(std::cos(hi)));
+// normal of the area: those within the normals' spread of the centre's.
+//
+// With the angle range [lo, hi] = [centre - spread, centre + spread] clamped
+// to [0, pi], the sines and cosines of its ends follow from those of the
+// centre (its cosine is the dot product) and of the spread by the angle-sum
+// identities: no trigonometric call per view (an acos and four more before,
+// a tenth of a quad selection's time).
+void angle_bounds(const View& view, const AreaNormals& n, double& s, double& c) {
+  const double cos_centre = std::clamp(dot(n.up, view.forward), -1.0, 1.0);
+  const double sin_centre = std::sqrt(std::max(0.0, 1 - cos_centre * cos_centre));
+  // lo > 0 when centre > spread, i.e. cos(centre) < cos(spread); hi < pi when
+  // centre + spread < pi, i.e. cos(centre) > cos(pi - spread) = -cos(spread).
+  double sin_lo = 0, cos_lo = 1, sin_hi = 0, cos_hi = -1;
+  if (cos_centre < n.cos_spread) {
+    sin_lo = sin_centre * n.cos_spread - cos_centre * n.sin_spread;
+    cos_lo = cos_centre * n.cos_spread + sin_centre * n.sin_spread;
+  }
+  if (cos_centre > -n.cos_spread) {
+    sin_hi = sin_centre * n.cos_spread + cos_centre * n.sin_spread;
+    cos_hi = cos_centre * n.cos_spread - sin_centre * n.sin_spread;
+  }
+  // lo <= pi/2 <= hi: the range holds the right angle, where |sin| = 1.
+  s = cos_lo >= 0 && cos_hi <= 0 ? 1.0 : std::max(sin_lo, sin_hi);
+  c = std::max(std::abs(cos_lo), std::abs(cos_hi));
 }
 
 }  // namespace
 
+AreaNormals area_normals(const geo::GeoBox& area) {
+  // The normals lie within half the area's extent along a meridian plus
+  // along a parallel of the centre's (at most pi: every direction).
+  const double spread = std::min((area.width() + area.height()) / 2 * kDegree, 2 * kHalfPi);
+  return {up_at((area.west + area.east) / 2, (area.south + area.north) / 2), std::cos(spread),
+          std::sin(spread)};
+}
+
 VerticalErrorParts vertical_error_parts(const View& view, const Box& box, const geo::GeoBox& area,
                                         double metres) {
+  if (metres <= 0) return {};
+  return vertical_error_parts(view, box, area_normals(area), metres);
+}
+
+VerticalErrorParts vertical_error_parts(const View& view, const Box& box,
+                                        const AreaNormals& normals, double metres) {
   VerticalErrorParts e;
   if (metres <= 0) return e;
   const double f = view.pixels_per_radian;
@@ -48,7 +77,7 @@ VerticalErrorParts vertical_error_parts(const View& view, const Box& box, const 
     t = std::max(t, std::sqrt(x * x + y * y) / z);
   }
   double s = 1, c = 1;
-  angle_bounds(view, area, s, c);
+  angle_bounds(view, normals, s, c);
   e.z_min = z_min;
   e.tangent = t;
   e.sin_bound = s;
@@ -60,6 +89,11 @@ VerticalErrorParts vertical_error_parts(const View& view, const Box& box, const 
 double vertical_error_pixels(const View& view, const Box& box, const geo::GeoBox& area,
                              double metres) {
   return vertical_error_parts(view, box, area, metres).pixels;
+}
+
+double vertical_error_pixels(const View& view, const Box& box, const AreaNormals& normals,
+                             double metres) {
+  return vertical_error_parts(view, box, normals, metres).pixels;
 }
 
 }  // namespace relief::lod

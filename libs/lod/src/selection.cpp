@@ -8,6 +8,7 @@
 #include <optional>
 #include <unordered_set>
 
+#include "level_grid.h"
 #include "quad_map.h"
 
 #include <fmt/format.h>
@@ -31,10 +32,14 @@ bool outside_frustum(const Box& b, const std::array<Plane, 5>& planes) {
 class Selector {
  public:
   Selector(const View& v, TerrainModel& t, const SelectionOptions& o)
-      : view_(&v), planes_(window_planes(v)), terrain_(t), o_(o) {}
+      : view_(&v), planes_(window_planes(v)), terrain_(t), o_(o) {
+    claim_map();
+  }
   // Without a view: every quad visible, split by `rule` (restricted_quadtree).
   Selector(TerrainModel& t, const SelectionOptions& o, std::function<bool(const TileKey&)> rule)
-      : view_(nullptr), terrain_(t), o_(o), rule_(std::move(rule)) {}
+      : view_(nullptr), terrain_(t), o_(o), rule_(std::move(rule)) {
+    claim_map();
+  }
 
   Status run() {
     const TileKey root{0, 0, 0};
@@ -48,22 +53,40 @@ class Selector {
     return {};
   }
 
+  ~Selector() { thread_map_in_use() = false; }
+  Selector(const Selector&) = delete;
+  Selector& operator=(const Selector&) = delete;
+
   Selection result() {
     Selection s;
-    leaves_.for_each([&](const TileKey& key, const Leaf& leaf) {
-      if (!leaf.visible) {
-        ++s.stats.culled;
-        return;
-      }
-      SelectedQuad q;
-      q.key = key;
-      q.error_pixels = leaf.error_pixels;
-      q.priority = leaf.priority;
-      classify_neighbours(q);
-      s.quads.push_back(q);
+    // In key order: sorted as packed keys (level, x, y: the order of
+    // TileKey's comparison), not as quads ten times larger.
+    std::vector<std::pair<TileKey, const Leaf*>> tree;  // one scan of the map's slots
+    tree.reserve(leaf_count_ * 2);
+    leaves_.for_each([&](const TileKey& key, const Leaf& leaf) { tree.emplace_back(key, &leaf); });
+    grid_.build([&](auto f) {
+      for (const auto& [key, leaf] : tree) f(key, leaf->internal);
     });
-    std::sort(s.quads.begin(), s.quads.end(),
-              [](const auto& a, const auto& b) { return a.key < b.key; });
+    std::vector<std::pair<uint64_t, const Leaf*>> visible;
+    visible.reserve(leaf_count_);
+    for (const auto& [key, leaf] : tree) {
+      if (leaf->internal) continue;
+      if (!leaf->visible) {
+        ++s.stats.culled;
+        continue;
+      }
+      visible.emplace_back(QuadMap<Leaf>::pack(key), leaf);
+    }
+    std::sort(visible.begin(), visible.end(),
+              [](const auto& a, const auto& b) { return a.first < b.first; });
+    s.quads.reserve(visible.size());
+    for (const auto& [packed, leaf] : visible) {
+      SelectedQuad& q = s.quads.emplace_back();
+      q.key = QuadMap<Leaf>::unpack(packed);
+      q.error_pixels = leaf->error_pixels;
+      q.priority = leaf->priority;
+      classify_neighbours(q);
+    }
     if (o_.neighbour_indices) link_neighbours(s.quads);
     // Quads may go deeper than the terrain (SelectionOptions::max_level).
     int deepest_quad = terrain_.max_level();
@@ -81,16 +104,17 @@ class Selector {
   }
 
  private:
-  struct Leaf {
-    bool visible = false;
+  struct Leaf {  // 24 bytes: the map's values are scanned twice per selection
     double error_pixels = 0;
-    bool split_for_samples = false;  // coarser samples than pixels
     double priority = 0;
+    bool visible = false;
+    bool split_for_samples = false;  // coarser samples than pixels
+    bool internal = false;           // split: an inner node of the tree, not a leaf
   };
 
   // Culls and measures one quad: visible, and its projected error bound.
   Result<Leaf> assess(const TileKey& key) {
-    if (!view_) return Leaf{true, rule_(key) ? INFINITY : 0.0};
+    if (!view_) return Leaf{.error_pixels = rule_(key) ? INFINITY : 0.0, .visible = true};
     if (terrain_.draws_ancestor(key) && !terrain_.blocking()) {
       // Deeper than the data, a quad whose tile is not resident can only be
       // a child of a culled quad (visible quads have their data): culled.
@@ -118,10 +142,10 @@ class Selector {
       // finest data than level_error: that share decides the split.
       const double error = RELIEF_TRY(terrain_.level_error(key));
       leaf.error_pixels =
-          vertical_error_pixels(view_ref, box, key.bounds(), error) / o_.level_error_share;
+          vertical_error_pixels(view_ref, box, info->normals, error) / o_.level_error_share;
     } else {
       const double error = RELIEF_TRY(terrain_.quad_error(key, *info));
-      leaf.error_pixels = vertical_error_pixels(view_ref, box, key.bounds(), error);
+      leaf.error_pixels = vertical_error_pixels(view_ref, box, info->normals, error);
     }
     // Up to the finest level of the data (and of the draped texture), a quad
     // must also provide at least one sample per pixel it covers (seed 003
@@ -202,7 +226,9 @@ class Selector {
     if (frozen_.contains(key)) return false;
     // Children of a culled quad are culled too (their bounds nest):
     // splitting it for the restriction needs no data.
-    if (const Leaf* leaf = leaves_.find(key); leaf && !leaf->visible) return true;
+    if (const Leaf* leaf = leaves_.find(key); leaf && !leaf->internal && !leaf->visible) {
+      return true;
+    }
     // Nor does a visible quad whose children are all culled: nothing of it
     // is drawn once it splits (the quad's own tile is there for its
     // children's sides shared with coarser quads).
@@ -317,10 +343,10 @@ class Selector {
     return {};
   }
 
-  // Splits `key` while its error asks for it; the leaves it ends with are
-  // also appended to `added` when given.
-  Status visit(const TileKey& key, std::deque<TileKey>* added = nullptr) {
-    if (leaves_.size() > o_.max_quads) {
+  // Splits `key` while its error asks for it; the quads it splits are also
+  // appended to `added` when given.
+  Status visit(const TileKey& key, std::vector<TileKey>* added = nullptr) {
+    if (leaf_count_ > o_.max_quads) {
       return fail(
           fmt::format("level of detail: more than {} quads; raise --pixel-error", o_.max_quads));
     }
@@ -330,10 +356,11 @@ class Selector {
                   (view_ && o_.also_split && o_.also_split(key)));
     if (split) split = splittable(key) && RELIEF_TRY(children_available(key));
     if (!split) {
-      leaves_.set(key, RELIEF_TRY(drawable(key, leaf)));
-      if (added) added->push_back(key);
+      set_leaf(key, RELIEF_TRY(drawable(key, leaf)));
       return {};
     }
+    set_internal(key);
+    if (added) added->push_back(key);
     for (int c = 0; c < 4; ++c) RELIEF_CHECK(visit(key.child(c & 1, c >> 1), added));
     return {};
   }
@@ -362,20 +389,39 @@ class Selector {
     return o_.mode == LodMode::edge_marks ? terrain_.data_max_level() : terrain_.max_level();
   }
 
-  // The leaf whose area contains quad `key` (key itself or an ancestor), if any.
+  // The leaf whose area contains quad `key` (key itself or an ancestor), if
+  // any. The map holds the split quads too, so the walk up stops at the
+  // first quad it finds: in a restricted tree within three probes.
   std::optional<TileKey> leaf_containing(TileKey key) {
     for (;;) {
-      if (leaves_.contains(key)) return key;
+      if (const Leaf* found = leaves_.find(key)) {
+        if (found->internal) return std::nullopt;  // subdivided below `key`
+        return key;
+      }
       if (key.level == 0) return std::nullopt;
       key = {key.level - 1, key.x >> 1, key.y >> 1};
     }
   }
 
+  void set_leaf(const TileKey& key, const Leaf& leaf) {
+    const Leaf* old = leaves_.find(key);
+    if (!old || old->internal) ++leaf_count_;
+    leaves_.set(key, leaf);
+  }
+  void set_internal(const TileKey& key) {
+    const Leaf* old = leaves_.find(key);
+    if (old && !old->internal) --leaf_count_;
+    Leaf inner;
+    inner.internal = true;
+    leaves_.set(key, inner);
+  }
+
   // A split for the restriction: the children may need splitting for their
   // own error too (a child's bound is not below its parent's: its sides may
   // take the parent's data), so they are visited like any quad.
-  Status split(const TileKey& key, std::deque<TileKey>& work) {
-    leaves_.erase(key);
+  Status split(const TileKey& key, std::vector<TileKey>& work) {
+    set_internal(key);
+    work.push_back(key);
     for (int c = 0; c < 4; ++c) RELIEF_CHECK(visit(key.child(c & 1, c >> 1), &work));
     return {};
   }
@@ -384,52 +430,68 @@ class Selector {
   // again in this selection.
   Status coarsen(const TileKey& key) {
     std::vector<TileKey> below;
-    leaves_.for_each([&](const TileKey& k, const Leaf&) {
+    leaves_.for_each([&](const TileKey& k, const Leaf& leaf) {
       if (k.level > key.level &&
           TileKey{key.level, k.x >> (k.level - key.level), k.y >> (k.level - key.level)} == key) {
         below.push_back(k);
+        if (!leaf.internal) --leaf_count_;
       }
     });
     for (const TileKey& k : below) leaves_.erase(k);
     const Leaf assessed = RELIEF_TRY(assess(key));
-    leaves_.set(key, RELIEF_TRY(drawable(key, assessed)));
+    set_leaf(key, RELIEF_TRY(drawable(key, assessed)));
     frozen_.insert(key);
     return {};
   }
 
-  // Splits leaves until quads sharing an edge or a corner differ by at most one level.
+  // Splits leaves until quads sharing an edge or a corner differ by at most
+  // one level. Checked on the split quads: the tree is restricted when the
+  // eight same-level neighbours of every split quad are in it (split or
+  // leaves), since a leaf's neighbours have its parent or the parent's
+  // neighbours as parents, and conversely each neighbour of a split quad is
+  // the parent of a neighbour of its deepest leaf in that direction. One
+  // probe per neighbour, a third as many quads as leaves.
   Status restrict_levels() {
-    std::deque<TileKey> work;
-    leaves_.for_each([&](const TileKey& key, const Leaf&) { work.push_back(key); });
+    std::vector<TileKey> work;
+    auto check_all = [&] {
+      work.clear();
+      leaves_.for_each([&](const TileKey& key, const Leaf& leaf) {
+        if (leaf.internal) work.push_back(key);
+      });
+    };
+    check_all();
     while (!work.empty()) {
-      const TileKey key = work.front();
-      work.pop_front();
-      if (!leaves_.contains(key)) continue;
+      const TileKey key = work.back();
+      work.pop_back();
+      if (const Leaf* leaf = leaves_.find(key); !leaf || !leaf->internal) continue;
       for (int dy = -1; dy <= 1; ++dy) {
         for (int dx = -1; dx <= 1; ++dx) {
           if (!dx && !dy) continue;
+          // Siblings are in the tree with `key`: no probe.
+          const int sx = static_cast<int>(key.x & 1) + dx, sy = static_cast<int>(key.y & 1) + dy;
+          if (key.level > 0 && sx >= 0 && sx <= 1 && sy >= 0 && sy <= 1) continue;
           const auto n = key.neighbour(dx, dy);
-          if (!n) continue;
-          const std::optional<TileKey> coarse = leaf_containing(*n);
-          if (coarse && coarse->level < key.level - 1) {
-            const TileKey victim = *coarse;
-            if (!splittable(victim) || !RELIEF_TRY(children_available(victim))) {
-              // Interactive: the coarse side has no finer data yet, so the
-              // fine side comes back up; everything is checked again. (Not
-              // splittable: should the padding not hold, the same.)
-              RELIEF_CHECK(coarsen(*key.parent()));
-              work.clear();
-              leaves_.for_each([&](const TileKey& k, const Leaf&) { work.push_back(k); });
-              dx = dy = 2;  // `key` is gone: next in the queue
-              break;
-            }
-            RELIEF_CHECK(split(victim, work));
-            work.push_back(key);
-            if (leaves_.size() > o_.max_quads) {
-              return fail(fmt::format("level of detail: more than {} quads; raise --pixel-error",
-                                      o_.max_quads));
-            }
+          if (!n || leaves_.find(*n)) continue;
+          // Inside a leaf coarser than `key`: split it.
+          const std::optional<TileKey> victim = leaf_containing(*n);
+          if (!victim) continue;  // not drawn at all (an interrupted selection)
+          if (!splittable(*victim) || !RELIEF_TRY(children_available(*victim))) {
+            // Interactive: the coarse side has no finer data yet, so the
+            // fine side comes back up; everything is checked again. (Not
+            // splittable: should the padding not hold, the same.)
+            RELIEF_CHECK(coarsen(key));
+            check_all();
+            dx = dy = 2;  // `key` is a leaf now: next in the list
+            break;
           }
+          RELIEF_CHECK(split(*victim, work));
+          work.push_back(key);  // the victim's child may still be too coarse
+          if (leaf_count_ > o_.max_quads) {
+            return fail(fmt::format("level of detail: more than {} quads; raise --pixel-error",
+                                    o_.max_quads));
+          }
+          dx = dy = 2;
+          break;
         }
       }
     }
@@ -441,8 +503,25 @@ class Selector {
   std::optional<int> neighbour_level(const TileKey& key, int dx, int dy) {
     const auto n = key.neighbour(dx, dy);
     if (!n) return std::nullopt;
+    switch (grid_.at(*n)) {
+      case LevelGrid::Cell::kLeaf:
+        return key.level;
+      case LevelGrid::Cell::kSplit:
+        return key.level + 1;  // subdivided: finer
+      case LevelGrid::Cell::kNone:
+        // Restricted: inside the parent, a leaf.
+        if (grid_.at({n->level - 1, n->x >> 1, n->y >> 1}) == LevelGrid::Cell::kLeaf) {
+          return key.level - 1;
+        }
+        break;
+      case LevelGrid::Cell::kUnknown:
+        break;
+    }
+    if (const Leaf* found = leaves_.find(*n)) {
+      return found->internal ? key.level + 1 : key.level;
+    }
     const std::optional<TileKey> leaf = leaf_containing(*n);
-    if (!leaf) return key.level + 1;  // subdivided below the neighbour
+    if (!leaf) return key.level + 1;
     return leaf->level;
   }
 
@@ -550,7 +629,26 @@ class Selector {
   TerrainModel& terrain_;
   const SelectionOptions& o_;
   std::function<bool(const TileKey&)> rule_;
-  QuadMap<Leaf> leaves_;
+  // The leaves and the split quads above them: the calling thread's map,
+  // whose slots (~1 MB for 10 000 quads) stay allocated between selections
+  // (a fresh map grew twice per frame: page faults and rehashes were ~8 % of
+  // a selection). One selection per thread at a time.
+  static QuadMap<Leaf>& thread_map() {
+    thread_local QuadMap<Leaf> map;
+    return map;
+  }
+  static bool& thread_map_in_use() {
+    thread_local bool in_use = false;
+    return in_use;
+  }
+  void claim_map() {
+    assert(!thread_map_in_use() && "a selection inside another on one thread");
+    thread_map_in_use() = true;
+    leaves_.clear();
+  }
+  QuadMap<Leaf>& leaves_ = thread_map();
+  size_t leaf_count_ = 0;
+  LevelGrid grid_;  // the finished tree, for classifying neighbours
   std::unordered_set<TileKey, geo::TileKeyHash> frozen_;  // coarsened: stay leaves
   uint32_t waiting_ = 0;                                  // data requested, not resident
   uint32_t deferred_ = 0;                                 // resident, not drawable_now

@@ -3,14 +3,17 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <deque>
 #include <mutex>
 #include <optional>
 
 #include <fmt/format.h>
 
 #include "mesh_error.h"
+#include "quad_map.h"
 #include "relief/geo/ellipsoid.h"
 #include "relief/lod/camera.h"
+#include "relief/lod/screen_error.h"
 
 namespace relief::lod {
 
@@ -60,6 +63,19 @@ double distance_to(const Box& b, const Vec3& p) {
   return std::sqrt(dx * dx + dy * dy + dz * dz);
 }
 
+// Looked up two or three times per quad the selection visits, a few
+// thousand quads per frame: open addressing (one cache miss, not a bucket's
+// and a node's), the records in a deque so their addresses stay valid while
+// the selection holds them.
+struct TerrainModel::QuadCache {
+  QuadMap<uint32_t> index{16384};
+  std::deque<QuadInfo> infos;
+  void clear() {
+    index.clear();
+    infos.clear();
+  }
+};
+
 TerrainModel::TerrainModel(const tiles::Store* store, const MeshTopology& mesh,
                            uint64_t cache_bytes)
     : TerrainModel(store, mesh, store ? blocking_provider(*store, cache_bytes) : nullptr, nullptr) {
@@ -76,7 +92,8 @@ TerrainModel::TerrainModel(const tiles::Store* store, const MeshTopology& mesh,
     : store_(store),
       mesh_(mesh),
       owned_provider_(std::move(owned)),
-      provider_(provider ? provider : owned_provider_.get()) {
+      provider_(provider ? provider : owned_provider_.get()),
+      quads_(std::make_unique<QuadCache>()) {
   if (!provider_) {  // the bare ellipsoid: no tiles at all
     owned_provider_ = std::make_unique<NoTiles>();
     provider_ = owned_provider_.get();
@@ -139,7 +156,7 @@ void TerrainModel::begin_frame() {
   pinned_.clear();
   // Per-quad bounds are recomputed from the index when dropped; dropping them
   // all at once keeps a long flight's memory flat.
-  if (quads_.size() > kMaxCachedQuads) quads_.clear();
+  if (quads_->infos.size() > kMaxCachedQuads) quads_->clear();
   if (subtree_.size() > kMaxCachedQuads) subtree_.clear();
   if (subtree_error_.size() > kMaxCachedQuads) subtree_error_.clear();
   provider_->begin_frame();
@@ -235,10 +252,11 @@ Result<HeightRange> TerrainModel::height_range(const geo::TileKey& key) {
 }
 
 Result<TerrainModel::QuadInfo*> TerrainModel::quad(const geo::TileKey& key) {
-  if (auto it = quads_.find(key); it != quads_.end()) return &it->second;
+  if (const uint32_t* i = quads_->index.find(key)) return &quads_->infos[*i];
   const HeightRange range = RELIEF_TRY(height_range(key));
-  const QuadInfo info{range, quad_box(key, range)};
-  return &quads_.emplace(key, info).first->second;
+  quads_->infos.push_back(QuadInfo{range, quad_box(key, range), area_normals(key.bounds())});
+  quads_->index.set(key, static_cast<uint32_t>(quads_->infos.size() - 1));
+  return &quads_->infos.back();
 }
 
 Result<double> TerrainModel::quad_error(const geo::TileKey& key, QuadInfo& info) {

@@ -48,6 +48,17 @@ struct TileKey {
   std::string to_string() const;  // "level/x/y"
 };
 
+// Inline: the quad selection calls it in its innermost loops. n is a power
+// of two: the mask wraps columns on either side (a modulo that is never
+// negative) without the two 64-bit divisions of `%`.
+inline std::optional<TileKey> TileKey::neighbour(int dx, int dy) const {
+  const int64_t n = tiles_per_side(level);
+  const int64_t ny = static_cast<int64_t>(y) + dy;
+  if (ny < 0 || ny >= n) return std::nullopt;
+  const int64_t nx = (static_cast<int64_t>(x) + dx) & (n - 1);
+  return TileKey{level, static_cast<uint32_t>(nx), static_cast<uint32_t>(ny)};
+}
+
 // A cheap, well-mixed hash (packed fields, murmur finaliser): level-of-detail
 // selection probes maps of quads hundreds of thousands of times a second.
 struct TileKeyHash {

@@ -45,4 +45,12 @@ struct VerticalErrorParts {
 VerticalErrorParts vertical_error_parts(const View& view, const Box& box, const geo::GeoBox& area,
                                         double metres);
 
+// The same, with the area's normals computed once (they cost three sines and
+// cosines: TerrainModel::QuadInfo keeps a quad's across frames).
+AreaNormals area_normals(const geo::GeoBox& area);
+VerticalErrorParts vertical_error_parts(const View& view, const Box& box,
+                                        const AreaNormals& normals, double metres);
+double vertical_error_pixels(const View& view, const Box& box, const AreaNormals& normals,
+                             double metres);
+
 }  // namespace relief::lod

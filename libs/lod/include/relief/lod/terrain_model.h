@@ -37,6 +37,13 @@ struct Box {
   Vec3 lo, hi;
 };
 
+// The geodetic normals over an area: within `spread` radians of the centre's
+// `up` (screen_error.h, area_normals), with the spread's cosine and sine.
+struct AreaNormals {
+  Vec3 up;
+  double cos_spread = 1, sin_spread = 0;
+};
+
 // Distance from a point to the nearest point of the box (0 inside).
 double distance_to(const Box& box, const Vec3& point);
 
@@ -114,6 +121,7 @@ class TerrainModel {
   struct QuadInfo {
     HeightRange range;
     Box box;
+    AreaNormals normals;     // of the quad's area (the angle bounds' trigonometry)
     double error = -1;       // < 0: not measured yet
     bool estimated = false;  // the quad's data was not resident: an estimate
   };
@@ -184,7 +192,8 @@ class TerrainModel {
   std::unordered_map<geo::TileKey, TilePtr, geo::TileKeyHash> pinned_;  // this frame's
   std::unordered_map<geo::TileKey, HeightRange, geo::TileKeyHash> subtree_;
   std::unordered_map<geo::TileKey, double, geo::TileKeyHash> subtree_error_;
-  std::unordered_map<geo::TileKey, QuadInfo, geo::TileKeyHash> quads_;
+  struct QuadCache;  // per-quad bounds: stable addresses, open addressing
+  std::unique_ptr<QuadCache> quads_;
   std::shared_ptr<PreparedErrors> prepared_;  // null: blocking provider
   TileProvider::Prepare own_prepare_;
   std::vector<TileProvider::Prepare> more_prepare_;
