@@ -96,6 +96,7 @@ path options:
 movie options (-o MOVIE.mp4):
   --codec C          h264 (default; libx264, yuv420p: even --size only)
   --crf N            quality, 0 (lossless) to 51 (default 18; lower is better)
+  --preset P         x264's speed for size: ultrafast .. veryslow (default veryfast)
 %TEXTURE%parallel (under mpirun -n N; docs/parallel.md):
   --parallel MODE    sort-first:h|v|grid (screen tiles), sort-last:block|quadtree|active
                      (quads, depth-composited) or wall:WALL.json (one display per rank,
@@ -256,6 +257,7 @@ int run_render(const std::vector<std::string>& command_line) {
                                               {"--no-frames", "", false},
                                               {"--codec"},
                                               {"--crf"},
+                                              {"--preset"},
                                               {"--parallel"},
                                               {"--composite"},
                                               {"--parallel-timeout"}}),
@@ -267,7 +269,7 @@ int run_render(const std::vector<std::string>& command_line) {
   }
   if (!args->get("--path")) {
     if (is_movie_output(*args->get("--output"))) return report_error("-o: a movie needs --path");
-    for (const char* name : {"--codec", "--crf"}) {
+    for (const char* name : {"--codec", "--crf", "--preset"}) {
       if (args->get(name)) return report_error(std::string(name) + ": only for a movie (--path)");
     }
   }

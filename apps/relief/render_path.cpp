@@ -87,7 +87,7 @@ Result<PathOptions> parse_path_options(const Args& args) {
   o.frames = !args.has("--no-frames");
   o.movie = is_movie_output(*args.get("--output"));
   if (!o.movie) {
-    for (const char* name : {"--codec", "--crf"}) {
+    for (const char* name : {"--codec", "--crf", "--preset"}) {
       if (args.get(name)) return fail(fmt::format("{}: only for a movie (-o FILE.mp4)", name));
     }
     return o;
@@ -99,6 +99,7 @@ Result<PathOptions> parse_path_options(const Args& args) {
   o.interactive = false;
   o.video.codec = args.get("--codec").value_or(o.video.codec);
   if (auto crf = RELIEF_TRY(args.get_int("--crf", 0, 51))) o.video.crf = *crf;
+  o.video.preset = args.get("--preset").value_or(o.video.preset);
   RELIEF_CHECK(video::check_options(o.video));
   return o;
 }
@@ -354,6 +355,7 @@ int render_path(const Args& args, RenderSetup& setup, const Clock& clock) {
     summary["movie"] = {{"file", out},
                         {"codec", options->video.codec},
                         {"crf", options->video.crf},
+                        {"preset", options->video.preset},
                         {"frames", movie_stats->frames},
                         {"bytes", movie_stats->bytes},
                         {"encode_ms", movie_stats->encode_seconds * 1e3},
@@ -379,10 +381,10 @@ int render_path(const Args& args, RenderSetup& setup, const Clock& clock) {
       static_cast<unsigned long long>(ls.loaded), static_cast<unsigned long long>(ls.failed),
       static_cast<double>(ls.bytes_fetched) / 1e6);
   if (movie_stats) {
-    std::printf("wrote %s: %llu frames, %dx%d at %g fps, %.1f MB, %s crf %d\n", out.c_str(),
-                static_cast<unsigned long long>(movie_stats->frames), setup.width, setup.height,
-                fps, static_cast<double>(movie_stats->bytes) / 1e6, options->video.codec.c_str(),
-                options->video.crf);
+    std::printf("wrote %s: %llu frames, %dx%d at %g fps, %.1f MB, %s crf %d preset %s\n",
+                out.c_str(), static_cast<unsigned long long>(movie_stats->frames), setup.width,
+                setup.height, fps, static_cast<double>(movie_stats->bytes) / 1e6,
+                options->video.codec.c_str(), options->video.crf, options->video.preset.c_str());
   }
   return 0;
 }

@@ -82,6 +82,7 @@ TEST_F(MovieTest, MovieHasThePathsFramesAndMatchesItsPngs) {
   EXPECT_EQ(stats["summary"]["mode"], "complete");  // a movie's frames are complete
   EXPECT_EQ(stats["summary"]["movie"]["frames"], 11);
   EXPECT_EQ(stats["summary"]["movie"]["crf"], 18);
+  EXPECT_EQ(stats["summary"]["movie"]["preset"], "veryfast");
 
   const RunResult p = render(pngs, {"--fps", "20", "--mode", "complete"});
   ASSERT_EQ(p.exit_code, 0) << p.err;
@@ -127,8 +128,10 @@ TEST_F(MovieTest, BadInputIsAOneLineErrorAndNoMovie) {
   expect_refused(render(movie, {"--size", "321x240"}), "--size: 321x240", movie);
   expect_refused(render(movie, {"--codec", "prores"}), "--codec: 'prores'", movie);
   expect_refused(render(movie, {"--crf", "60"}), "--crf", movie);
+  expect_refused(render(movie, {"--preset", "warp"}), "--preset: 'warp'", movie);
   expect_refused(render(movie, {"--no-frames"}), "--no-frames", movie);
   expect_refused(render(scratch("frames"), {"--crf", "20"}), "--crf", scratch("frames"));
+  expect_refused(render(scratch("frames"), {"--preset", "slow"}), "--preset", scratch("frames"));
   // Under a regular file: unwritable even for root.
   std::ofstream(scratch("a-file")) << "x";
   const fs::path unwritable = scratch("a-file") / "flight.mp4";

@@ -9,6 +9,11 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <iterator>
+#include <string>
+#include <utility>
+
+#include <fmt/format.h>
 
 #include "movie_probe.h"
 #include "test_support.h"
@@ -70,6 +75,35 @@ TEST(VideoWriter, FramesSizeDurationAndPixelsReadBack) {
   const std::vector<Image> decoded = decode_movie(movie, kWidth, kHeight);
   ASSERT_EQ(decoded.size(), size_t{kFrames});
   for (int i = 0; i < kFrames; ++i) EXPECT_GE(psnr(decoded[i], written[i]), 40) << "frame " << i;
+}
+
+// The preset reaches x264, which writes its settings into the stream (an SEI
+// message: "x264 - core ... options: ..."): ultrafast turns CABAC off,
+// veryfast (the default) searches sub-pixels at level 2, veryslow at 10. The
+// frames read back as well at every preset.
+TEST(VideoWriter, ThePresetReachesTheEncoder) {
+  ScratchDir dir("video_writer_preset");
+  constexpr int kWidth = 64, kHeight = 48, kFrames = 4;
+  for (const auto& [preset, setting] :
+       {std::pair{"ultrafast", "cabac=0"}, {"veryfast", "subme=2"}, {"veryslow", "subme=10"}}) {
+    const fs::path movie = dir / fmt::format("{}.mp4", preset);
+    video::VideoOptions options;
+    if (std::string(preset) != "veryfast") options.preset = preset;  // else the default
+    auto writer = video::VideoWriter::open(movie, kWidth, kHeight, 24, options);
+    ASSERT_TRUE(writer) << writer.error().message;
+    std::vector<Image> written;
+    for (int i = 0; i < kFrames; ++i) {
+      written.push_back(synthetic_frame(kWidth, kHeight, i));
+      ASSERT_TRUE((*writer)->write(written.back().rgba));
+    }
+    ASSERT_TRUE((*writer)->finish());
+    std::ifstream in(movie, std::ios::binary);
+    const std::string bytes{std::istreambuf_iterator<char>(in), {}};
+    EXPECT_NE(bytes.find(setting), std::string::npos) << preset;
+    const std::vector<Image> decoded = decode_movie(movie, kWidth, kHeight);
+    ASSERT_EQ(decoded.size(), size_t{kFrames}) << preset;
+    for (int i = 0; i < kFrames; ++i) EXPECT_GE(psnr(decoded[i], written[i]), 40) << preset;
+  }
 }
 
 // The movie export reads frames back bottom row first (as GL stores them)
@@ -157,6 +191,8 @@ TEST(VideoWriter, BadInputIsAOneLineErrorAndNoFile) {
   expect_refused(video::VideoWriter::open(movie, 32, 16, 10, {.codec = "prores"}),
                  "--codec: 'prores'", dir.path());
   expect_refused(video::VideoWriter::open(movie, 32, 16, 10, {.crf = 52}), "--crf", dir.path());
+  expect_refused(video::VideoWriter::open(movie, 32, 16, 10, {.preset = "Medium"}),
+                 "--preset: 'Medium'", dir.path());
   EXPECT_FALSE(fs::exists(movie));
   // Under a regular file: no directory can be made there (root ignores modes).
   std::ofstream(dir / "file") << "x";

@@ -9,4 +9,8 @@ struct CodecName {
 };
 inline constexpr CodecName kCodecs[] = {{"h264", "libx264"}};
 
+// libx264's presets, fastest first.
+inline constexpr const char* kPresets[] = {"ultrafast", "superfast", "veryfast", "faster",  "fast",
+                                           "medium",    "slow",      "slower",   "veryslow"};
+
 }  // namespace relief::video

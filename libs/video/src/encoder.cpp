@@ -93,7 +93,7 @@ class FfmpegEncoder final : public Encoder {
     if (format->oformat->flags & AVFMT_GLOBALHEADER) codec->flags |= AV_CODEC_FLAG_GLOBAL_HEADER;
     AVDictionary* private_options = nullptr;
     av_dict_set(&private_options, "crf", std::to_string(options.crf).c_str(), 0);
-    av_dict_set(&private_options, "preset", "medium", 0);
+    av_dict_set(&private_options, "preset", options.preset.c_str(), 0);
     const int opened = avcodec_open2(codec, encoder, &private_options);
     av_dict_free(&private_options);
     if (opened < 0) return error(fmt::format("cannot open the {} encoder", encoder_name), opened);

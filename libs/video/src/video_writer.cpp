@@ -69,6 +69,12 @@ std::string codec_names() {
   return names;
 }
 
+std::string preset_names() {
+  std::string names;
+  for (const char* p : kPresets) names += (names.empty() ? "" : ", ") + std::string(p);
+  return names;
+}
+
 Status check_options(const VideoOptions& options) {
   bool known = false;
   for (const CodecName& c : kCodecs) known = known || options.codec == c.name;
@@ -77,6 +83,12 @@ Status check_options(const VideoOptions& options) {
         fmt::format("--codec: '{}' is not a supported codec ({})", options.codec, codec_names()));
   }
   if (options.crf < 0 || options.crf > 51) return fail("--crf: must be in [0, 51]");
+  bool preset = false;
+  for (const char* p : kPresets) preset = preset || options.preset == p;
+  if (!preset) {
+    return fail(
+        fmt::format("--preset: '{}' is not an x264 preset ({})", options.preset, preset_names()));
+  }
   if (options.queue_frames < 1) return fail("video: the queue needs at least one frame");
   return {};
 }

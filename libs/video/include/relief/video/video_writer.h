@@ -22,11 +22,18 @@ namespace relief::video {
 struct VideoOptions {
   std::string codec = "h264";  // see codec_names()
   int crf = 18;                // constant rate factor: 0 (lossless) .. 51, lower is better
-  int queue_frames = 3;        // frames waiting for the encoder before write() blocks
+  // x264's speed against size at the same quality: ultrafast .. veryslow
+  // (preset_names()). veryfast: on two cores "medium" took a quarter of all
+  // CPU time of an export and slowed it to 77 % of rendering alone (93 % with
+  // veryfast), for a file of the same size over the Pyrenees (docs/video.md).
+  std::string preset = "veryfast";
+  int queue_frames = 3;  // frames waiting for the encoder before write() blocks
 };
 
 // The codecs `codec` may name, for help texts and error messages.
 std::string codec_names();
+// The presets `preset` may name, fastest first.
+std::string preset_names();
 // Fails with a one-line message naming the option if `options` is not usable.
 Status check_options(const VideoOptions& options);
 
