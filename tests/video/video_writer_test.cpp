@@ -108,7 +108,12 @@ TEST(VideoWriter, ThePresetReachesTheEncoder) {
 
 // The movie export reads frames back bottom row first (as GL stores them)
 // into recycled buffers and lets the encoder flip them: the movie must be
-// exactly the one written from top-first frames.
+// the one written from top-first frames. Not bit for bit: two x264 encoders
+// running at once do not always make the same decisions (even on identical
+// input a few hundred pixels of a frame differed by up to 6 levels), so each
+// frame must match the one written, and both movies each other, at > 35 dB
+// (crf 18 on frames this small: 38-45 dB); a frame upside down or a recycled
+// buffer overwritten early is far below.
 TEST(VideoWriter, BottomUpRowsInRecycledBuffersGiveTheSameFrames) {
   ScratchDir dir("video_writer_rows");
   constexpr int kWidth = 64, kHeight = 48, kFrames = 10;
@@ -116,8 +121,9 @@ TEST(VideoWriter, BottomUpRowsInRecycledBuffersGiveTheSameFrames) {
   auto bottom = video::VideoWriter::open(dir / "bottom.mp4", kWidth, kHeight, 24, {});
   ASSERT_TRUE(top && bottom);
   const size_t row = size_t{kWidth} * 4;
+  std::vector<Image> written;
   for (int i = 0; i < kFrames; ++i) {
-    const Image frame = synthetic_frame(kWidth, kHeight, i);
+    const Image& frame = written.emplace_back(synthetic_frame(kWidth, kHeight, i));
     ASSERT_TRUE((*top)->write(frame.rgba));
     std::vector<uint8_t> flipped = (*bottom)->take_buffer();
     ASSERT_EQ(flipped.size(), frame.rgba.size());
@@ -132,7 +138,10 @@ TEST(VideoWriter, BottomUpRowsInRecycledBuffersGiveTheSameFrames) {
   const std::vector<Image> b = decode_movie(dir / "bottom.mp4", kWidth, kHeight);
   ASSERT_EQ(a.size(), size_t{kFrames});
   ASSERT_EQ(b.size(), size_t{kFrames});
-  for (int i = 0; i < kFrames; ++i) EXPECT_TRUE(a[i].rgba == b[i].rgba) << "frame " << i;
+  for (int i = 0; i < kFrames; ++i) {
+    EXPECT_GE(psnr(b[i], written[static_cast<size_t>(i)]), 35) << "frame " << i;
+    EXPECT_GE(psnr(a[i], b[i]), 35) << "frame " << i;
+  }
 }
 
 TEST(VideoWriter, FractionalFrameRateKeepsTheDuration) {

@@ -61,18 +61,22 @@ void lower_this_threads_priority() {
   if (errno == 0) (void)setpriority(PRIO_PROCESS, tid, std::min(nice + kEncoderNicer, 19));
 }
 
+// "a, b, c": the names an option accepts, for its help and its errors.
+template <class Names, class Name>
+std::string comma_separated(const Names& names, Name name_of) {
+  std::string out;
+  for (const auto& n : names) out += (out.empty() ? "" : ", ") + std::string(name_of(n));
+  return out;
+}
+
 }  // namespace
 
 std::string codec_names() {
-  std::string names;
-  for (const CodecName& c : kCodecs) names += (names.empty() ? "" : ", ") + std::string(c.name);
-  return names;
+  return comma_separated(kCodecs, [](const CodecName& c) { return c.name; });
 }
 
 std::string preset_names() {
-  std::string names;
-  for (const char* p : kPresets) names += (names.empty() ? "" : ", ") + std::string(p);
-  return names;
+  return comma_separated(kPresets, [](const char* p) { return p; });
 }
 
 Status check_options(const VideoOptions& options) {

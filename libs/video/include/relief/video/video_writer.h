@@ -24,7 +24,7 @@ struct VideoOptions {
   int crf = 18;                // constant rate factor: 0 (lossless) .. 51, lower is better
   // x264's speed against size at the same quality: ultrafast .. veryslow
   // (preset_names()). veryfast: on two cores "medium" took a quarter of all
-  // CPU time of an export and slowed it to 77 % of rendering alone (93 % with
+  // CPU time of an export and slowed it to 77 % of rendering alone (90 % with
   // veryfast), for a file of the same size over the Pyrenees (docs/video.md).
   std::string preset = "veryfast";
   int queue_frames = 3;  // frames waiting for the encoder before write() blocks
