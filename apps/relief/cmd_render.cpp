@@ -66,7 +66,9 @@ options:
   --pixel-error E    largest screen-space error in pixels (default 1)
   --exaggeration X   vertical exaggeration (default 1)
   --lod MODE         edge-marks (default), edge-marks-bottom-up (the same mesh,
-                     every mark decided: a reference) or quads
+                     every mark decided: a reference), edge-marks-gl (bottom-up,
+                     every split criterion evaluated by a GL compute shader:
+                     the same mesh) or quads
   --mesh-level R     --lod quads: 2^(R+1) x 2^R squares per quad (default 4)
   --full-resolution  every finest sample a vertex (the brute-force reference)
   --sky R,G,B        background colour, 0-255 (default 156,189,224)
@@ -199,6 +201,8 @@ int render_still(const Args& args, RenderSetup& setup) {
     if (frame->refine) {
       stats["refine"] = {{"ms", frame->refine->seconds * 1e3},
                          {"marks_evaluated", frame->refine->marks_evaluated},
+                         {"criteria_ms", frame->refine->criteria_seconds * 1e3},
+                         {"marks_near", frame->refine->marks_near},
                          {"tiles_measured", frame->refine->tiles_measured},
                          {"tiles_prepared", frame->refine->tiles_prepared},
                          {"too_coarse_quads", frame->refine->too_coarse},

@@ -109,6 +109,8 @@ json refine_json(const view::FrameReport& r) {
   return {{"ms", s.seconds * 1e3},
           {"cpu_ms", s.cpu_seconds * 1e3},
           {"marks_evaluated", s.marks_evaluated},
+          {"criteria_ms", s.criteria_seconds * 1e3},
+          {"marks_near", s.marks_near},
           {"marks_reused", s.marks_reused},
           {"quads_reused", s.quads_reused},
           {"tiles_measured", s.tiles_measured},

@@ -137,10 +137,14 @@ Result<RenderSetup> parse_render_setup(const Args& args, TextureLayers textures,
   if (auto lod = args.get("--lod")) {
     if (*lod == "quads") {
       s.lod_mode = lod::LodMode::quads;
+    } else if (*lod == "edge-marks-gl") {
+      s.refine_variant = lod::RefineVariant::kBottomUp;
+      s.refine_on_gpu = true;
     } else if (*lod == "edge-marks" || *lod == "edge-marks-bottom-up") {
       if (*lod == "edge-marks-bottom-up") s.refine_variant = lod::RefineVariant::kBottomUp;
     } else {
-      return fail("--lod: '" + *lod + "' is none of edge-marks, edge-marks-bottom-up, quads");
+      return fail("--lod: '" + *lod +
+                  "' is none of edge-marks, edge-marks-bottom-up, edge-marks-gl, quads");
     }
   }
   s.full_resolution = args.has("--full-resolution");
@@ -212,6 +216,7 @@ view::SceneOptions scene_options(const RenderSetup& setup) {
   so.mesh_level = setup.mesh_level;
   so.selection.mode = setup.lod_mode;
   so.refine_variant = setup.refine_variant;
+  so.refine_on_gpu = setup.refine_on_gpu;
   so.refine_threads = setup.refine_threads.value_or(0);  // one per core unless given
   so.gpu_budget = setup.gpu_budget;
   so.loader.worker_nice = setup.loader_nice;

@@ -27,6 +27,7 @@ struct RenderSetup {
   int mesh_level = 4;
   lod::LodMode lod_mode = lod::LodMode::edge_marks;
   lod::RefineVariant refine_variant = lod::RefineVariant::kTopDown;
+  bool refine_on_gpu = false;  // --lod edge-marks-gl
   bool full_resolution = false;
   std::array<float, 3> sky{};
   uint64_t gpu_budget = uint64_t{1} << 30;

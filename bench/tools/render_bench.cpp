@@ -19,6 +19,7 @@
 
 #include <fmt/format.h>
 
+#include "lod_bench_setup.h"
 #include "relief/base/parallel.h"
 #include "relief/lod/measured_error.h"
 #include "relief/lod/refine.h"
@@ -144,57 +145,21 @@ Result<Measure> measure(const tiles::Store& store, const lod::View& view, Mesh m
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc != 3 && argc != 4) {
-    std::fprintf(stderr, "usage: render_bench STORE pyrenees|himalaya [MARKDOWN_ROWS_OUT]\n");
-    return 2;
-  }
-  const std::string view_set = argv[2];
-  if (view_set != "pyrenees" && view_set != "himalaya") {
-    std::fprintf(stderr, "%s: unknown view set (pyrenees, himalaya)\n", argv[2]);
-    return 2;
-  }
-  FILE* markdown = argc == 4 ? std::fopen(argv[3], "a") : nullptr;
-  if (argc == 4 && !markdown) {
-    std::fprintf(stderr, "%s: cannot open for appending\n", argv[3]);
-    return 1;
-  }
-  auto store = tiles::Store::open(argv[1]);
-  if (!store) {
-    std::fprintf(stderr, "%s\n", store.error().message.c_str());
-    return 1;
-  }
-  auto context = render::GlContext::create_headless();
-  if (!context) {
-    std::fprintf(stderr, "%s\n", context.error().message.c_str());
-    return 1;
-  }
+  int exit_code = 0;
+  auto bench = bench::open_lod_bench(argc, argv, "render_bench", exit_code);
+  if (!bench) return exit_code;
+  const tiles::Store* store = &*bench->store;
+  FILE* markdown = bench->markdown;
   std::printf(
       "renderer: %s; 1280x720, pixel error 1; edge marks (refined quads), quads (mesh level 4), "
       "brute force (every finest sample)\n",
-      (*context)->renderer().c_str());
-  struct ViewCase {
-    const char* name;
-    lod::Camera camera;
-  };
-  const std::vector<ViewCase> pyrenees = {
-      {"globe", {1.5, 30, 12e6, 0, -90, 0, 60, 1280, 720}},
-      {"regional oblique", lod::look_at(1.5, 42.5, 1500, 60000, 20, -35, 60, 1280, 720)},
-      {"low flight to the horizon", {1.05, 42.05, 2300, 35, -4, 0, 60, 1280, 720}},
-  };
-  // The block spans 78-84 E, 28-32 N: plains (~200 m) in the south-west, the
-  // main range (to 7 800 m) across it.
-  const std::vector<ViewCase> himalaya = {
-      {"globe", {81, 30, 12e6, 0, -90, 0, 60, 1280, 720}},
-      {"regional oblique", lod::look_at(81, 30, 4000, 150000, 20, -35, 60, 1280, 720)},
-      {"low flight to the horizon", {80.5, 28.55, 1200, 20, -3, 0, 60, 1280, 720}},
-      {"straight down from 900 km", {81, 30, 900e3, 0, -90, 0, 60, 1280, 720}},
-  };
-  const std::vector<ViewCase>& views = view_set == "himalaya" ? himalaya : pyrenees;
+      bench->context->renderer().c_str());
+  const std::vector<bench::ViewCase>& views = bench->views;
   const unsigned cores = PooledExecutor().concurrency();
   std::printf("%-27s %-6s %8s %11s %7s %6s %10s %10s %10s %9s %8s %11s\n", "view", "mesh", "quads",
               "triangles", "tri/px", "draws", "select ms", fmt::format("{} thr ms", cores).c_str(),
               "(cold ms)", "gpu ms", "bound px", "measured px");
-  for (const ViewCase& v : views) {
+  for (const bench::ViewCase& v : views) {
     auto view = lod::make_view(v.camera);
     if (!view) {
       std::fprintf(stderr, "%s: %s\n", v.name, view.error().message.c_str());
@@ -246,9 +211,5 @@ int main(int argc, char** argv) {
       std::printf("\n");
     }
   }
-  if (markdown && std::fclose(markdown) != 0) {
-    std::fprintf(stderr, "%s: write failed\n", argv[3]);
-    return 1;
-  }
-  return 0;
+  return bench::close_markdown(*bench, argv[3]) ? 0 : 1;
 }

@@ -2,6 +2,8 @@
 // error naming the argument, before rendering or writing anything.
 #include <gtest/gtest.h>
 
+#include <fmt/format.h>
+
 #include "relief/base/file_io.h"
 #include "test_support.h"
 
@@ -71,14 +73,19 @@ TEST_F(RenderArgs, ImpossibleCameraValuesNameTheArgument) {
   EXPECT_FALSE(fs::exists(out));
 }
 
-// The refinement in lanes makes the mesh of one thread: the same image.
-TEST_F(RenderArgs, RefineThreadsDrawTheSameImage) {
+// The refinement in lanes makes the mesh of one thread, and so does the
+// one whose split criteria the GL compute shader evaluates: the same image.
+TEST_F(RenderArgs, RefineThreadsAndTheGlCriteriaDrawTheSameImage) {
   std::vector<std::vector<std::byte>> images;
-  for (const char* threads : {"1", "3"}) {
-    const std::string out = (dir_->path() / (std::string("threads-") + threads + ".png")).string();
-    auto r = run_relief({"render", store_, "-o", out, "--look-at", "1.5,42.5,1500,30000,20,-35",
-                         "--size", "320x240", "--refine-threads", threads},
-                        kNoMesaLeakReport);
+  const std::vector<std::vector<std::string>> runs = {
+      {"--refine-threads", "1"}, {"--refine-threads", "3"}, {"--lod", "edge-marks-gl"}};
+  for (size_t i = 0; i < runs.size(); ++i) {
+    const std::string out = (dir_->path() / fmt::format("refined-{}.png", i)).string();
+    std::vector<std::string> args = {"render", store_,      "-o",
+                                     out,      "--look-at", "1.5,42.5,1500,30000,20,-35",
+                                     "--size", "320x240"};
+    args.insert(args.end(), runs[i].begin(), runs[i].end());
+    auto r = run_relief(args, kNoMesaLeakReport);
     ASSERT_EQ(r.exit_code, 0) << r.err;
     auto bytes = read_file(out);
     ASSERT_TRUE(bytes) << bytes.error().message;
@@ -86,6 +93,16 @@ TEST_F(RenderArgs, RefineThreadsDrawTheSameImage) {
   }
   ASSERT_GT(images[0].size(), 1000u);
   EXPECT_EQ(images[0], images[1]);
+  EXPECT_EQ(images[0], images[2]);
+}
+
+TEST_F(RenderArgs, AnUnknownLodModeNamesTheModes) {
+  const std::string out = (dir_->path() / "lod.png").string();
+  auto r = run_relief({"render", store_, "-o", out, "--size", "32x24", "--lod", "edge-marks-gpu"},
+                      kNoMesaLeakReport);
+  EXPECT_TRUE(is_one_line_error(r, "--lod: 'edge-marks-gpu' is none of")) << r.err;
+  EXPECT_NE(r.err.find("edge-marks-gl"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out));
 }
 
 }  // namespace

@@ -102,6 +102,8 @@ class MarkGrid {
   // a class: what is stored per diamond, so that the coarse diamonds every
   // frame visits first lie together in memory instead of one per grid row.
   uint32_t slots() const { return offsets_[2 * k_ - 1]; }
+  // The first slot of class c (0 <= c <= classes(): then the halves' centres).
+  uint32_t class_offset(int c) const { return offsets_[static_cast<size_t>(c)]; }
   uint32_t slot(GridPoint centre) const;
   // slot() where the diamond's kind and size are known (2^j: h of a
   // diagonal, s of an axis diamond): the same numbers, without finding them.

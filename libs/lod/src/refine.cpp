@@ -23,6 +23,7 @@
 #include "mark_blocks.h"
 #include "quad_map.h"
 #include "relief/geo/ellipsoid.h"
+#include "relief/lod/criterion_evaluator.h"
 #include "relief/lod/screen_error.h"
 
 namespace relief::lod {
@@ -428,7 +429,9 @@ struct Quad {
   double level_error = 0;
   std::shared_ptr<const DiamondErrors> errors;  // null: no data, height 0
   std::shared_ptr<const SideEdges> edges;       // null: no side takes coarser data
-  uint8_t blocking = 0;                         // Side bits: shared with a coarser selected quad
+  // RefineOptions::criteria: a CriterionClass per slot (null: none).
+  const uint8_t* criteria = nullptr;
+  uint8_t blocking = 0;  // Side bits: shared with a coarser selected quad
   // Reusing decisions (RefineHistory).
   QuadDecisions* old = nullptr;  // the last record of this quad, if it still applies
   struct Block {
@@ -612,6 +615,7 @@ class Refiner {
   // This lane's statistics added to those of the refiner it was copied from.
   void merge(const Refiner& lane) {
     stats_.marks_evaluated += lane.stats_.marks_evaluated;
+    stats_.marks_near += lane.stats_.marks_near;
     stats_.max_unresolved_pixels =
         std::max(stats_.max_unresolved_pixels, lane.stats_.max_unresolved_pixels);
     unresolved_keys_.insert(unresolved_keys_.end(), lane.unresolved_keys_.begin(),
@@ -628,6 +632,67 @@ class Refiner {
     std::sort(unresolved_keys_.begin(), unresolved_keys_.end());
     stats_.unresolved += static_cast<uint64_t>(
         std::unique(unresolved_keys_.begin(), unresolved_keys_.end()) - unresolved_keys_.begin());
+  }
+
+  // RefineOptions::criteria: every diamond's criterion of every quad
+  // evaluated by `evaluator` (into `classes`, which must outlive the
+  // refinement), each quad's inputs as pixels() reads them.
+  Status evaluate_criteria(CriterionEvaluator& evaluator,
+                           std::vector<std::vector<uint8_t>>& classes) {
+    const int32_t n = grid_.n();
+    const int k = grid_.k();
+    std::vector<uint32_t> offsets;
+    for (int c = 0; c <= grid_.classes(); ++c) offsets.push_back(grid_.class_offset(c));
+    std::vector<CriterionQuad> in(quads_.size());
+    // Per quad: the steps, then the spreads (kept here while evaluated).
+    std::vector<std::vector<double>> tables(quads_.size());
+    for (size_t i = 0; i < quads_.size(); ++i) {
+      const Quad& q = quads_[i];
+      CriterionQuad& c = in[i];
+      c.west = q.bounds.west;
+      c.north = q.bounds.north;
+      c.cell = q.cell;
+      c.level_error = q.level_error;
+      if (q.errors) {
+        c.errors = {reinterpret_cast<const uint8_t*>(q.errors->at.data()), q.errors->bytes()};
+      }
+      if (q.edges) {
+        for (size_t side = 0; side < 4; ++side) c.sides[side] = q.edges->side[side].values();
+      }
+      c.west_sin = q.west.s;
+      c.west_cos = q.west.c;
+      c.north_sin = q.north.s;
+      c.north_cos = q.north.c;
+      std::vector<double>& t = tables[i];
+      for (int32_t j = 0; j <= 2 * n; ++j) t.insert(t.end(), {q.steps[j].s, q.steps[j].c});
+      // The spread of area_normals() over a diamond's area of half-side
+      // reach() cells: 3h (diagonals, class 2j) or 2s (axis, class 2j - 1).
+      for (int cls = 0; cls < grid_.classes(); ++cls) {
+        const int32_t reach = cls % 2 == 0 ? 3 << (cls / 2) : 2 << (cls / 2 + 1);
+        const double spread = std::min(2 * reach * q.cell * kDegree, kPi);
+        t.insert(t.end(), {std::cos(spread), std::sin(spread)});
+      }
+      const auto all = std::span<const double>(t);
+      c.steps = all.first(static_cast<size_t>(2 * (2 * n + 1)));
+      c.spreads = all.subspan(c.steps.size());
+      c.normals = q.normals;
+    }
+    CriterionFrame f;
+    f.view = &view_;
+    f.pixel_error = o_.pixel_error;
+    f.k = k;
+    f.class_offsets = offsets;
+    f.arc = kArc;
+    f.rounding = kRounding;
+    RELIEF_CHECK(evaluator.evaluate(f, in, classes));
+    for (size_t i = 0; i < quads_.size(); ++i) {
+      if (classes[i].size() < offsets.back()) {
+        return fail(fmt::format("refine: the criterion evaluator gave {} classes for {} diamonds",
+                                classes[i].size(), offsets.back()));
+      }
+      quads_[i].criteria = classes[i].data();
+    }
+    return {};
   }
 
   void bottom_up() {
@@ -1218,6 +1283,12 @@ class Refiner {
   double pixels(int q, GridPoint p, uint32_t slot, const Diamond& d, Criterion* out = nullptr,
                 bool exact = false) {
     const Quad& quad = quads_[static_cast<size_t>(q)];
+    if (quad.criteria && !out && !exact) {  // evaluated elsewhere, every diamond at once
+      const auto c = static_cast<CriterionClass>(quad.criteria[slot]);
+      if (c == CriterionClass::kUnder) return 0;
+      if (c == CriterionClass::kOver) return INFINITY;
+      ++stats_.marks_near;
+    }
     const int32_t n = grid_.n();
     double error = 0, lo = 0, hi = 0;
     if (quad.errors) {
@@ -1732,10 +1803,17 @@ Result<RefinedMesh> refine(const View& view, TerrainModel& terrain, const Select
     o.history = nullptr;
   }
   std::vector<Quad> quads(selection.quads.size());
+  double criteria_seconds = 0;
   Refiner r(view, terrain, selection, o, cache.impl(), marks, steps, quads);
   RELIEF_CHECK(r.prepare());
   RefinedMesh mesh;
-  double lanes_cpu = 0;  // of the lanes' threads other than this one
+  double lanes_cpu = 0;                       // of the lanes' threads other than this one
+  std::vector<std::vector<uint8_t>> classes;  // RefineOptions::criteria's
+  if (o.criteria && !r.reuse_all()) {
+    const auto at = std::chrono::steady_clock::now();
+    RELIEF_CHECK(r.evaluate_criteria(*o.criteria, classes));
+    criteria_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - at).count();
+  }
   if (r.reuse_all()) {
     mesh = r.reused_mesh();
   } else {
@@ -1757,6 +1835,7 @@ Result<RefinedMesh> refine(const View& view, TerrainModel& terrain, const Select
   cache.impl().end_frame(terrain);
   if (o.history) judge_reuse(*history, mesh.stats);
   mesh.stats.history_asleep = asleep;
+  mesh.stats.criteria_seconds = criteria_seconds;
   mesh.stats.seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   mesh.stats.cpu_seconds = thread_cpu_seconds() - cpu_start + lanes_cpu;

@@ -115,23 +115,37 @@ std::string info_log(GLuint id, bool program) {
   }
   return log;
 }
+
+Result<GLuint> compile(GLenum type, const char* source) {
+  const GLuint s = glCreateShader(type);
+  glShaderSource(s, 1, &source, nullptr);
+  glCompileShader(s);
+  GLint ok = 0;
+  glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
+  if (!ok) {
+    const std::string log = info_log(s, false);
+    glDeleteShader(s);
+    return fail("GLSL: " + log);
+  }
+  return s;
+}
 }  // namespace
+
+Result<Program> Program::link_compute(const char* source) {
+  const GLuint cs = RELIEF_TRY(compile(GL_COMPUTE_SHADER, source));
+  Program p;
+  p.id_ = glCreateProgram();
+  glAttachShader(p.id_, cs);
+  glLinkProgram(p.id_);
+  glDeleteShader(cs);
+  GLint ok = 0;
+  glGetProgramiv(p.id_, GL_LINK_STATUS, &ok);
+  if (!ok) return fail("GLSL link: " + info_log(p.id_, true));
+  return p;
+}
 
 Result<Program> Program::link(const char* vertex_source, const char* fragment_source,
                               const std::vector<const char*>& captured) {
-  auto compile = [](GLenum type, const char* source) -> Result<GLuint> {
-    const GLuint s = glCreateShader(type);
-    glShaderSource(s, 1, &source, nullptr);
-    glCompileShader(s);
-    GLint ok = 0;
-    glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
-    if (!ok) {
-      const std::string log = info_log(s, false);
-      glDeleteShader(s);
-      return fail("GLSL: " + log);
-    }
-    return s;
-  };
   const GLuint vs = RELIEF_TRY(compile(GL_VERTEX_SHADER, vertex_source));
   auto fs = compile(GL_FRAGMENT_SHADER, fragment_source);
   if (!fs) {

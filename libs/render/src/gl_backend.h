@@ -108,6 +108,8 @@ class Program {
   // recorded by transform feedback (tests), interleaved.
   static Result<Program> link(const char* vertex_source, const char* fragment_source,
                               const std::vector<const char*>& captured = {});
+  // Compiles and links a compute shader.
+  static Result<Program> link_compute(const char* source);
   Program() = default;
   ~Program();
   Program(Program&& o) noexcept;

@@ -13,6 +13,7 @@
 
 #include "relief/base/memory_use.h"
 #include "relief/lod/split_feedback.h"
+#include "relief/render/gl_refine_criteria.h"
 #include "relief/render/overlay.h"
 #include "relief/stream/radius_pager.h"
 #include "relief/view/ground.h"
@@ -72,10 +73,11 @@ struct Scene::Impl {
   std::vector<std::unique_ptr<stream::TileLoader>> layer_loaders;  // interactive texture layers
   std::unique_ptr<lod::TerrainModel> terrain;
   std::unique_ptr<render::TerrainRenderer> renderer;
-  std::unique_ptr<lod::RefineCache> refine_cache;  // edge-mark frames
-  std::unique_ptr<PooledExecutor> refine_threads;  // SceneOptions::refine_threads > 1
-  lod::SplitFeedback split_feedback;               // what the last refinements wanted split
-  std::optional<lod::Camera> previous;             // of the last frame, unless cut
+  std::unique_ptr<lod::RefineCache> refine_cache;          // edge-mark frames
+  std::unique_ptr<PooledExecutor> refine_threads;          // SceneOptions::refine_threads > 1
+  std::unique_ptr<render::GlRefineCriteria> gpu_criteria;  // SceneOptions::refine_on_gpu
+  lod::SplitFeedback split_feedback;                       // what the last refinements wanted split
+  std::optional<lod::Camera> previous;                     // of the last frame, unless cut
   lod::Selection last;
   std::optional<lod::RefinedMesh> last_refined;
   // Edge-mark frames: the last frames' decisions, reused where the camera
@@ -336,6 +338,10 @@ Result<FrameReport> Scene::draw(const lod::Camera& camera, render::RenderTarget&
     ro.cache = m.refine_cache.get();
     ro.history = &m.refine_history;
     ro.executor = m.refine_threads.get();
+    if (m.options.refine_on_gpu && !m.gpu_criteria) {
+      m.gpu_criteria = RELIEF_TRY(render::GlRefineCriteria::create());
+    }
+    ro.criteria = m.gpu_criteria.get();
     refined = RELIEF_TRY(lod::refine(view, *m.terrain, selection, ro));
     // SceneOptions::split_feedback, interactive frames: what this frame's
     // refinement wanted split, the next frames split (complete frames stay a

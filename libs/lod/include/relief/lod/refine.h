@@ -32,6 +32,8 @@
 
 namespace relief::lod {
 
+class CriterionEvaluator;
+
 enum class RefineVariant : uint8_t { kTopDown, kBottomUp };
 
 // Per-diamond errors of data tiles (about 2 MB per tile of 512 x 256), kept
@@ -99,6 +101,13 @@ struct RefineOptions {
   Executor* executor = nullptr;
   RefineCache* cache = nullptr;      // null: a cache for this call only
   RefineHistory* history = nullptr;  // null: every quad decided from scratch
+  // Every diamond's criterion evaluated at once by this (a GL compute shader:
+  // render::GlRefineCriteria) before the refinement, which then looks the
+  // decisions up and evaluates only those too near the threshold: the same
+  // mesh. It evaluates every diamond, as bottom-up does: worth it with
+  // RefineVariant::kBottomUp on a GPU. Null: the criteria are evaluated here,
+  // as reached.
+  CriterionEvaluator* criteria = nullptr;
 };
 
 // Needs a selection made with SelectionOptions::neighbour_indices, of quads no

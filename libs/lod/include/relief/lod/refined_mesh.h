@@ -26,6 +26,10 @@ struct RefinedQuad {
 
 struct RefineStats {
   uint64_t marks_evaluated = 0;  // split criteria evaluated
+  // RefineOptions::criteria: the diamonds whose criterion it found too near
+  // the threshold to decide (evaluated here), and the time it took (seconds).
+  uint64_t marks_near = 0;
+  double criteria_seconds = 0;
   // With a RefineHistory: quads whose decisions were the last evaluation's
   // (the camera moved too little to change any), and the criteria that
   // evaluation computed for them.

@@ -45,6 +45,11 @@ struct SceneOptions {
   // thread that draws; 0, one per core. More than one: a pool of them kept
   // by the scene, the drawing thread one of them.
   unsigned refine_threads = 1;
+  // Every diamond's split criterion evaluated by a GL compute shader
+  // (render::GlRefineCriteria, created in the drawing thread's context at the
+  // first refinement): the same mesh. Pays with RefineVariant::kBottomUp on
+  // a GPU with double precision; on llvmpipe it is slower than the CPU.
+  bool refine_on_gpu = false;
   // Edge marks, interactive frames: the quads a frame's refinement wanted
   // split (RefineStats::split_wanted), the next frames' selection splits
   // (lod/split_feedback.h), and a frame that wanted any is not complete.

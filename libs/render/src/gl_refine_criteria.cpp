@@ -1,0 +1,129 @@
+#include "relief/render/gl_refine_criteria.h"
+
+#include <fmt/format.h>
+
+#include "gl_backend.h"
+#include "refine_criteria_shader.h"
+#include "relief/geo/ellipsoid.h"
+
+namespace relief::render {
+
+struct GlRefineCriteria::Impl {
+  gl::Program program;
+  gl::Buffer errors, grid, sides, classes, class_offsets;
+  gl::Uploads uploads;
+  uint64_t read = 0;
+  std::vector<double> grid_values;
+  std::vector<float> side_values;
+
+  void set(const char* name, double v) {
+    glProgramUniform1d(program.id(), program.location(name), v);
+  }
+  void set(const char* name, int v) { glProgramUniform1i(program.id(), program.location(name), v); }
+  void set(const char* name, const lod::Vec3& v) {
+    glProgramUniform3d(program.id(), program.location(name), v.x, v.y, v.z);
+  }
+
+  void set_frame(const lod::CriterionFrame& f) {
+    const lod::View& v = *f.view;
+    set("eye", v.eye);
+    set("view_right", v.right);
+    set("view_up", v.up);
+    set("view_forward", v.forward);
+    set("pixels_per_radian", v.pixels_per_radian);
+    set("corner", v.tan_half_x * v.tan_half_x + v.tan_half_y * v.tan_half_y);
+    set("threshold", f.pixel_error);
+    set("band", f.band);
+    set("arc", f.arc);
+    set("rounding", f.rounding);
+    set("e2", geo::wgs84::kFirstEccentricitySquared);
+    set("n", 1 << f.k);
+    set("class_count", static_cast<int>(f.class_offsets.size()) - 1);
+    const std::vector<GLint> offsets(f.class_offsets.begin(), f.class_offsets.end());
+    class_offsets.write(offsets.data(), offsets.size() * sizeof(GLint), uploads);
+    set("slot_count", static_cast<int>(f.class_offsets.back()));
+  }
+
+  // One quad: its inputs uploaded, its classes computed and read back.
+  void evaluate(const lod::CriterionQuad& q, uint32_t slots, std::vector<uint8_t>& out) {
+    set("west_sin", q.west_sin);
+    set("west_cos", q.west_cos);
+    set("north_sin", q.north_sin);
+    set("north_cos", q.north_cos);
+    set("cell", q.cell);
+    set("level_error", q.level_error);
+    set("has_errors", q.errors.empty() ? 0 : 1);
+    if (!q.errors.empty()) errors.write(q.errors.data(), q.errors.size(), uploads);
+    grid_values.assign(q.steps.begin(), q.steps.end());
+    set("spreads_at", static_cast<int>(grid_values.size()));
+    grid_values.insert(grid_values.end(), q.spreads.begin(), q.spreads.end());
+    set("normals_at", static_cast<int>(grid_values.size()));
+    grid_values.insert(grid_values.end(), q.normals.begin(), q.normals.end());
+    grid.write(grid_values.data(), grid_values.size() * sizeof(double), uploads);
+    side_values.clear();
+    GLint first[4], count[4];
+    for (size_t s = 0; s < 4; ++s) {
+      first[s] = static_cast<GLint>(side_values.size());
+      count[s] = static_cast<GLint>(q.sides[s].size());
+      side_values.insert(side_values.end(), q.sides[s].begin(), q.sides[s].end());
+    }
+    if (side_values.empty()) side_values.push_back(0);  // a buffer must be bound
+    sides.write(side_values.data(), side_values.size() * sizeof(float), uploads);
+    glProgramUniform1iv(program.id(), program.location("side_first"), 4, first);
+    glProgramUniform1iv(program.id(), program.location("side_count"), 4, count);
+    const uint32_t words = (slots + 3) / 4;
+    if (classes.size() < words * 4u) {  // sized once: every word is written
+      const std::vector<uint8_t> zero(words * 4u);
+      classes.write(zero.data(), zero.size(), uploads);
+    }
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, q.errors.empty() ? grid.id() : errors.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, grid.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, sides.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, classes.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 4, class_offsets.id());
+    glUseProgram(program.id());
+    glDispatchCompute((words + 63) / 64, 1, 1);
+    glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+    out.resize(words * 4u);
+    glGetNamedBufferSubData(classes.id(), 0, static_cast<GLsizeiptr>(words) * 4, out.data());
+    read += words * 4u;
+  }
+};
+
+GlRefineCriteria::GlRefineCriteria(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+GlRefineCriteria::~GlRefineCriteria() = default;
+
+Result<std::unique_ptr<GlRefineCriteria>> GlRefineCriteria::create() {
+  auto impl = std::make_unique<Impl>();
+  auto program = gl::Program::link_compute(kRefineCriteriaShader);
+  if (!program) return fail("the refinement's criterion shader: " + program.error().message);
+  impl->program = std::move(*program);
+  return std::unique_ptr<GlRefineCriteria>(new GlRefineCriteria(std::move(impl)));
+}
+
+Status GlRefineCriteria::evaluate(const lod::CriterionFrame& frame,
+                                  std::span<const lod::CriterionQuad> quads,
+                                  std::vector<std::vector<uint8_t>>& classes) {
+  if (frame.class_offsets.size() < 2 || frame.class_offsets.size() > 65) {
+    return fail(fmt::format("GL refinement criteria: {} classes of diamonds (1 to 64 supported)",
+                            frame.class_offsets.size() - 1));
+  }
+  const uint32_t slots = frame.class_offsets.back();
+  classes.resize(quads.size());
+  impl_->set_frame(frame);
+  for (size_t i = 0; i < quads.size(); ++i) impl_->evaluate(quads[i], slots, classes[i]);
+  glUseProgram(0);
+  if (const GLenum e = glGetError(); e != GL_NO_ERROR) {
+    return fail(fmt::format("GL refinement criteria: GL error 0x{:x}", e));
+  }
+  return {};
+}
+
+uint64_t GlRefineCriteria::bytes_uploaded() const {
+  return impl_->uploads.geometry;
+}
+uint64_t GlRefineCriteria::bytes_read() const {
+  return impl_->read;
+}
+
+}  // namespace relief::render

@@ -1,0 +1,79 @@
+// Edge-mark refinement with its split criteria evaluated by the GL compute
+// shader (render::GlRefineCriteria) on real terrain: the mesh of the CPU
+// refinement, bit for bit, with few diamonds left to the CPU.
+#include <gtest/gtest.h>
+
+#include "../lod/refine_fixtures.h"
+#include "relief/lod/criterion_evaluator.h"
+#include "relief/render/gl_refine_criteria.h"
+#include "relief/render/terrain_renderer.h"
+
+namespace relief::render {
+namespace {
+
+using namespace relief::lod::testing;
+
+GlRefineCriteria& criteria() {
+  static std::unique_ptr<GlContext> context = [] {
+    auto c = GlContext::create_headless();
+    if (!c) throw std::runtime_error(c.error().message);
+    return std::move(*c);
+  }();
+  static std::unique_ptr<GlRefineCriteria> criteria = [] {
+    auto c = GlRefineCriteria::create();
+    if (!c) throw std::runtime_error(c.error().message);
+    return std::move(*c);
+  }();
+  return *criteria;
+}
+
+lod::RefinedMesh refined_on_gpu(Terrain& t, const lod::View& view, const lod::Selection& s,
+                                double pixel_error, lod::RefineVariant variant) {
+  lod::RefineOptions o;
+  o.pixel_error = pixel_error;
+  o.variant = variant;
+  o.cache = &t.cache;
+  o.criteria = &criteria();
+  auto mesh = lod::refine(view, t.terrain, s, o);
+  EXPECT_TRUE(mesh) << mesh.error().message;
+  return mesh ? std::move(*mesh) : lod::RefinedMesh{};
+}
+
+TEST(GlRefineCriteria, GiveTheMeshOfTheCpuRefinement) {
+  for (const char* name : {"down", "scotland", "grazing"}) {
+    SCOPED_TRACE(name);
+    const Case& c = case_named(name);
+    Terrain& t = c.terrain();
+    auto view = lod::make_view(c.camera);
+    ASSERT_TRUE(view);
+    const lod::Selection s = select(t, *view, c.pixel_error);
+    for (double pixel_error : {c.pixel_error, 4 * c.pixel_error}) {
+      const lod::RefinedMesh cpu = refined(t, *view, s, pixel_error, lod::RefineVariant::kTopDown);
+      for (auto variant : {lod::RefineVariant::kBottomUp, lod::RefineVariant::kTopDown}) {
+        const lod::RefinedMesh gpu = refined_on_gpu(t, *view, s, pixel_error, variant);
+        EXPECT_GT(cpu.triangles(), 8 * s.quads.size());
+        EXPECT_EQ(gpu.indices, cpu.indices);
+        EXPECT_EQ(gpu.stats.unresolved, cpu.stats.unresolved);
+        // Nearly every criterion decided on the GPU: a shader computing
+        // something else would leave many near the threshold or change the mesh.
+        EXPECT_GT(gpu.stats.marks_evaluated, 0u);
+        EXPECT_LE(gpu.stats.marks_near * 1000, gpu.stats.marks_evaluated)
+            << gpu.stats.marks_near << " of " << gpu.stats.marks_evaluated;
+        EXPECT_GT(gpu.stats.criteria_seconds, 0);
+      }
+    }
+  }
+}
+
+TEST(GlRefineCriteria, AGridWithoutClassesIsAnError) {
+  lod::View view;
+  lod::CriterionFrame f;
+  f.view = &view;
+  std::vector<std::vector<uint8_t>> classes;
+  const Status s = criteria().evaluate(f, {}, classes);
+  ASSERT_FALSE(s);
+  EXPECT_NE(s.error().message.find("classes of diamonds"), std::string::npos) << s.error().message;
+}
+
+}  // namespace
+}  // namespace relief::render
