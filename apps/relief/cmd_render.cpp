@@ -66,9 +66,9 @@ options:
   --pixel-error E    largest screen-space error in pixels (default 1)
   --exaggeration X   vertical exaggeration (default 1)
   --lod MODE         edge-marks (default), edge-marks-bottom-up (the same mesh,
-                     every mark decided: a reference), edge-marks-gl (bottom-up,
-                     every split criterion evaluated by a GL compute shader:
-                     the same mesh) or quads
+                     every mark decided: a reference), edge-marks-gl (every
+                     split criterion evaluated by a GL compute shader first:
+                     the same mesh; docs/rendering.md) or quads
   --mesh-level R     --lod quads: 2^(R+1) x 2^R squares per quad (default 4)
   --full-resolution  every finest sample a vertex (the brute-force reference)
   --sky R,G,B        background colour, 0-255 (default 156,189,224)

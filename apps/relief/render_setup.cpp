@@ -138,7 +138,6 @@ Result<RenderSetup> parse_render_setup(const Args& args, TextureLayers textures,
     if (*lod == "quads") {
       s.lod_mode = lod::LodMode::quads;
     } else if (*lod == "edge-marks-gl") {
-      s.refine_variant = lod::RefineVariant::kBottomUp;
       s.refine_on_gpu = true;
     } else if (*lod == "edge-marks" || *lod == "edge-marks-bottom-up") {
       if (*lod == "edge-marks-bottom-up") s.refine_variant = lod::RefineVariant::kBottomUp;

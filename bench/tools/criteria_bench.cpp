@@ -1,12 +1,14 @@
-// bench/refine-gl: edge-mark refinement of fixed views three ways, side by
+// bench/refine-gl: edge-mark refinement of fixed views four ways, side by
 // side in one run: top-down on the CPU (the default), bottom-up on the CPU
-// (every diamond decided, the seed's reference) and bottom-up with every
-// split criterion evaluated by the GL compute shader
-// (render::GlRefineCriteria) in this process's GL context. Median of 3 warm
-// refinements after a warm-up one (tiles read, diamond errors measured); the
-// three meshes must be equal (the bench fails otherwise). Prints per view the
-// quads, diamonds decided, the times, the shader's share and the ratios; with
-// a third argument, markdown rows appended to that file.
+// (every diamond decided, the seed's reference), and both with every split
+// criterion evaluated by the GL compute shader (render::GlRefineCriteria) in
+// this process's GL context. Median of 3 warm refinements after a warm-up
+// one (tiles read, diamond errors measured); the four meshes must be equal
+// (the bench fails otherwise). Prints per view the quads, triangles,
+// diamonds (bottom-up decides them all), the times, the shader's time and
+// what is left of top-down with its classes (the walk), and the diamonds the
+// shader left to the CPU; with a third argument, markdown rows appended to
+// that file.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -78,8 +80,8 @@ int main(int argc, char** argv) {
   }
   std::printf("renderer: %s; 1280x720, pixel error 1, one thread refining\n",
               bench->context->renderer().c_str());
-  std::printf("%-27s %6s %10s %12s %10s %12s %12s %10s %8s %10s\n", "view", "quads", "triangles",
-              "top-down ms", "marks", "bottom-up ms", "GL b-u ms", "shader ms", "near", "GL/b-u");
+  std::printf("%-27s %6s %10s %10s %9s %9s %9s %9s %9s %9s %6s\n", "view", "quads", "triangles",
+              "diamonds", "td ms", "bu ms", "GL bu ms", "GL td ms", "shader ms", "walk ms", "near");
   for (const bench::ViewCase& v : bench->views) {
     auto view = lod::make_view(v.camera);
     if (!view) {
@@ -106,31 +108,36 @@ int main(int argc, char** argv) {
       return 1;
     }
     const auto& expected = reference->indices;
-    auto top_down = time_refinement(*view, terrain, *selection, cache, lod::RefineVariant::kTopDown,
-                                    nullptr, expected);
-    auto bottom_up = time_refinement(*view, terrain, *selection, cache,
-                                     lod::RefineVariant::kBottomUp, nullptr, expected);
-    auto gl = time_refinement(*view, terrain, *selection, cache, lod::RefineVariant::kBottomUp,
-                              criteria->get(), expected);
-    if (!top_down || !bottom_up || !gl) {
-      const Error& e = !top_down ? top_down.error() : !bottom_up ? bottom_up.error() : gl.error();
-      std::fprintf(stderr, "%s: %s\n", v.name, e.message.c_str());
-      return 1;
+    auto time = [&](lod::RefineVariant variant, lod::CriterionEvaluator* c) {
+      return time_refinement(*view, terrain, *selection, cache, variant, c, expected);
+    };
+    using enum lod::RefineVariant;
+    const auto top_down = time(kTopDown, nullptr), bottom_up = time(kBottomUp, nullptr);
+    const auto gl_bottom_up = time(kBottomUp, criteria->get());
+    const auto gl_top_down = time(kTopDown, criteria->get());
+    for (const auto* t : {&top_down, &bottom_up, &gl_bottom_up, &gl_top_down}) {
+      if (!*t) {
+        std::fprintf(stderr, "%s: %s\n", v.name, t->error().message.c_str());
+        return 1;
+      }
     }
-    std::printf("%-27s %6zu %10llu %12.2f %10llu %12.1f %12.1f %10.1f %8llu %9.2fx\n", v.name,
+    // The top-down walk with the shader's classes: what a GPU that evaluates
+    // the criteria in no time would leave.
+    const double walk = gl_top_down->ms - gl_top_down->criteria_ms;
+    std::printf("%-27s %6zu %10llu %10llu %9.2f %9.1f %9.1f %9.1f %9.1f %9.2f %6llu\n", v.name,
                 selection->quads.size(), static_cast<unsigned long long>(top_down->triangles),
-                top_down->ms, static_cast<unsigned long long>(bottom_up->marks), bottom_up->ms,
-                gl->ms, gl->criteria_ms, static_cast<unsigned long long>(gl->near),
-                gl->ms / bottom_up->ms);
+                static_cast<unsigned long long>(bottom_up->marks), top_down->ms, bottom_up->ms,
+                gl_bottom_up->ms, gl_top_down->ms, gl_top_down->criteria_ms, walk,
+                static_cast<unsigned long long>(gl_bottom_up->near + gl_top_down->near));
     if (markdown) {
       std::fprintf(markdown,
-                   "| %s | %zu | %llu | %.2f ms | %llu | %.1f ms | %.1f ms (shader %.1f ms, %llu "
-                   "near) | %.2fx | %.0fx |\n",
+                   "| %s | %zu | %llu | %llu | %.2f ms | %.1f ms | %.1f ms | %.1f ms | %.1f ms | "
+                   "%.2f ms | %llu |\n",
                    v.name, selection->quads.size(),
-                   static_cast<unsigned long long>(top_down->triangles), top_down->ms,
-                   static_cast<unsigned long long>(bottom_up->marks), bottom_up->ms, gl->ms,
-                   gl->criteria_ms, static_cast<unsigned long long>(gl->near),
-                   gl->ms / bottom_up->ms, gl->ms / std::max(top_down->ms, 1e-3));
+                   static_cast<unsigned long long>(top_down->triangles),
+                   static_cast<unsigned long long>(bottom_up->marks), top_down->ms, bottom_up->ms,
+                   gl_bottom_up->ms, gl_top_down->ms, gl_top_down->criteria_ms, walk,
+                   static_cast<unsigned long long>(gl_bottom_up->near + gl_top_down->near));
     }
   }
   return bench::close_markdown(*bench, argv[3]) ? 0 : 1;

@@ -104,9 +104,8 @@ struct RefineOptions {
   // Every diamond's criterion evaluated at once by this (a GL compute shader:
   // render::GlRefineCriteria) before the refinement, which then looks the
   // decisions up and evaluates only those too near the threshold: the same
-  // mesh. It evaluates every diamond, as bottom-up does: worth it with
-  // RefineVariant::kBottomUp on a GPU. Null: the criteria are evaluated here,
-  // as reached.
+  // mesh, either variant. It evaluates every diamond, as bottom-up does.
+  // Null: the criteria are evaluated here, as reached.
   CriterionEvaluator* criteria = nullptr;
 };
 

@@ -47,8 +47,9 @@ struct SceneOptions {
   unsigned refine_threads = 1;
   // Every diamond's split criterion evaluated by a GL compute shader
   // (render::GlRefineCriteria, created in the drawing thread's context at the
-  // first refinement): the same mesh. Pays with RefineVariant::kBottomUp on
-  // a GPU with double precision; on llvmpipe it is slower than the CPU.
+  // first refinement) before the refinement looks them up: the same mesh.
+  // On llvmpipe it is 10-25 times slower than the CPU's top-down refinement
+  // (docs/rendering.md, "Split criteria on the GPU").
   bool refine_on_gpu = false;
   // Edge marks, interactive frames: the quads a frame's refinement wanted
   // split (RefineStats::split_wanted), the next frames' selection splits
