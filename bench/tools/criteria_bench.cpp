@@ -6,9 +6,10 @@
 // one (tiles read, diamond errors measured); the four meshes must be equal
 // (the bench fails otherwise). Prints per view the quads, triangles,
 // diamonds (bottom-up decides them all), the times, the shader's time and
-// what is left of top-down with its classes (the walk), and the diamonds the
-// shader left to the CPU; with a third argument, markdown rows appended to
-// that file.
+// what is left of top-down with its classes (the walk), the diamonds the
+// shader left to the CPU and the bytes uploaded per warm refinement with the
+// shader (the diamond errors stay on the GPU); with a third argument,
+// markdown rows appended to that file.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -33,11 +34,12 @@ constexpr int kRuns = 3;
 struct Timing {
   double ms = 0, criteria_ms = 0;
   uint64_t marks = 0, near = 0, triangles = 0;
+  double uploaded_mb = 0;  // GL: to the GPU per warm refinement
 };
 
 Result<Timing> time_refinement(const lod::View& view, lod::TerrainModel& terrain,
                                const lod::Selection& selection, lod::RefineCache& cache,
-                               lod::RefineVariant variant, lod::CriterionEvaluator* criteria,
+                               lod::RefineVariant variant, render::GlRefineCriteria* criteria,
                                const std::vector<uint32_t>& expected) {
   lod::RefineOptions o;
   o.pixel_error = 1;
@@ -46,7 +48,9 @@ Result<Timing> time_refinement(const lod::View& view, lod::TerrainModel& terrain
   o.criteria = criteria;
   std::vector<double> ms, criteria_ms;
   Timing t;
+  uint64_t uploaded = 0;
   for (int r = 0; r <= kRuns; ++r) {
+    if (r == 1 && criteria) uploaded = criteria->bytes_uploaded();
     const lod::RefinedMesh m = RELIEF_TRY(lod::refine(view, terrain, selection, o));
     if (!expected.empty() && m.indices != expected) {
       return fail("another mesh than top-down's on the CPU");
@@ -62,6 +66,7 @@ Result<Timing> time_refinement(const lod::View& view, lod::TerrainModel& terrain
   std::sort(criteria_ms.begin(), criteria_ms.end());
   t.ms = ms[ms.size() / 2];
   t.criteria_ms = criteria_ms[criteria_ms.size() / 2];
+  if (criteria) t.uploaded_mb = double(criteria->bytes_uploaded() - uploaded) / kRuns / 1e6;
   return t;
 }
 
@@ -80,8 +85,9 @@ int main(int argc, char** argv) {
   }
   std::printf("renderer: %s; 1280x720, pixel error 1, one thread refining\n",
               bench->context->renderer().c_str());
-  std::printf("%-27s %6s %10s %10s %9s %9s %9s %9s %9s %9s %6s\n", "view", "quads", "triangles",
-              "diamonds", "td ms", "bu ms", "GL bu ms", "GL td ms", "shader ms", "walk ms", "near");
+  std::printf("%-27s %6s %10s %10s %9s %9s %9s %9s %9s %9s %6s %6s\n", "view", "quads", "triangles",
+              "diamonds", "td ms", "bu ms", "GL bu ms", "GL td ms", "shader ms", "walk ms", "near",
+              "MB up");
   for (const bench::ViewCase& v : bench->views) {
     auto view = lod::make_view(v.camera);
     if (!view) {
@@ -108,7 +114,7 @@ int main(int argc, char** argv) {
       return 1;
     }
     const auto& expected = reference->indices;
-    auto time = [&](lod::RefineVariant variant, lod::CriterionEvaluator* c) {
+    auto time = [&](lod::RefineVariant variant, render::GlRefineCriteria* c) {
       return time_refinement(*view, terrain, *selection, cache, variant, c, expected);
     };
     using enum lod::RefineVariant;
@@ -124,20 +130,23 @@ int main(int argc, char** argv) {
     // The top-down walk with the shader's classes: what a GPU that evaluates
     // the criteria in no time would leave.
     const double walk = gl_top_down->ms - gl_top_down->criteria_ms;
-    std::printf("%-27s %6zu %10llu %10llu %9.2f %9.1f %9.1f %9.1f %9.1f %9.2f %6llu\n", v.name,
-                selection->quads.size(), static_cast<unsigned long long>(top_down->triangles),
+    std::printf("%-27s %6zu %10llu %10llu %9.2f %9.1f %9.1f %9.1f %9.1f %9.2f %6llu %6.2f\n",
+                v.name, selection->quads.size(),
+                static_cast<unsigned long long>(top_down->triangles),
                 static_cast<unsigned long long>(bottom_up->marks), top_down->ms, bottom_up->ms,
                 gl_bottom_up->ms, gl_top_down->ms, gl_top_down->criteria_ms, walk,
-                static_cast<unsigned long long>(gl_bottom_up->near + gl_top_down->near));
+                static_cast<unsigned long long>(gl_bottom_up->near + gl_top_down->near),
+                gl_top_down->uploaded_mb);
     if (markdown) {
       std::fprintf(markdown,
                    "| %s | %zu | %llu | %llu | %.2f ms | %.1f ms | %.1f ms | %.1f ms | %.1f ms | "
-                   "%.2f ms | %llu |\n",
+                   "%.2f ms | %llu | %.2f MB |\n",
                    v.name, selection->quads.size(),
                    static_cast<unsigned long long>(top_down->triangles),
                    static_cast<unsigned long long>(bottom_up->marks), top_down->ms, bottom_up->ms,
                    gl_bottom_up->ms, gl_top_down->ms, gl_top_down->criteria_ms, walk,
-                   static_cast<unsigned long long>(gl_bottom_up->near + gl_top_down->near));
+                   static_cast<unsigned long long>(gl_bottom_up->near + gl_top_down->near),
+                   gl_top_down->uploaded_mb);
     }
   }
   return bench::close_markdown(*bench, argv[3]) ? 0 : 1;

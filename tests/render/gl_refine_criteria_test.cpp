@@ -65,6 +65,60 @@ TEST(GlRefineCriteria, GiveTheMeshOfTheCpuRefinement) {
   }
 }
 
+// The tiles' diamond errors stay on the GPU: a view that does not change
+// uploads only each quad's small tables again (grid steps, sides). Over the
+// budget, the errors a frame did not use go at its end (a frame's own stay).
+TEST(GlRefineCriteria, AStaticViewUploadsTheDiamondErrorsOnce) {
+  criteria();  // the GL context
+  const Case& a = case_named("scotland");
+  const Case& b = case_named("down");  // the Pyrenees: other tiles
+  for (const uint64_t budget : {uint64_t{256} << 20, uint64_t{1}}) {
+    SCOPED_TRACE(budget);
+    auto gl = GlRefineCriteria::create(budget);
+    ASSERT_TRUE(gl) << gl.error().message;
+    // Bytes uploaded to refine c's view.
+    // own_cache: the diamond errors die with the call (their owners
+    // expire: the GPU's copies are stale, and their addresses may be reused
+    // by the next tile's errors).
+    auto refine_view = [&](const Case& c, bool own_cache = false) -> uint64_t {
+      Terrain& t = c.terrain();
+      auto view = lod::make_view(c.camera);
+      EXPECT_TRUE(view);
+      const lod::Selection s = select(t, *view, c.pixel_error);
+      lod::RefineOptions o;
+      o.pixel_error = c.pixel_error;
+      lod::RefineCache scratch(0);
+      o.cache = own_cache ? &scratch : &t.cache;
+      o.criteria = gl->get();
+      const uint64_t before = (*gl)->bytes_uploaded();
+      auto mesh = lod::refine(*view, t.terrain, s, o);
+      EXPECT_TRUE(mesh) << mesh.error().message;
+      EXPECT_EQ(mesh->indices,
+                refined(t, *view, s, c.pixel_error, lod::RefineVariant::kTopDown).indices);
+      return (*gl)->bytes_uploaded() - before;
+    };
+    const uint64_t first = refine_view(a), again = refine_view(a);
+    const uint64_t resident = (*gl)->resident_bytes();
+    EXPECT_GT(resident, first / 2);  // most of it: the errors
+    EXPECT_LT(again * 10, first) << first << " then " << again;
+    refine_view(b);
+    if (budget > 1) {
+      EXPECT_GT((*gl)->resident_bytes(), resident);  // both views'
+      EXPECT_EQ(refine_view(a), again);
+    } else {  // only the last frame's
+      EXPECT_LT((*gl)->resident_bytes(), resident);
+      // (The first frame also sized the classes' buffer.)
+      EXPECT_GT(refine_view(a) * 10, first * 9);
+    }
+    // Errors measured anew each time, the last ones' expired: uploaded
+    // again, and the expired ones dropped at the end of the next frame.
+    const uint64_t kept = (*gl)->resident_bytes();
+    for (int i = 0; i < 2; ++i) EXPECT_GT(refine_view(a, true) * 10, first * 9);
+    refine_view(a);
+    EXPECT_EQ((*gl)->resident_bytes(), kept);
+  }
+}
+
 TEST(GlRefineCriteria, AGridWithoutClassesIsAnError) {
   lod::View view;
   lod::CriterionFrame f;

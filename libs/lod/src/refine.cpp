@@ -655,6 +655,7 @@ class Refiner {
       c.level_error = q.level_error;
       if (q.errors) {
         c.errors = {reinterpret_cast<const uint8_t*>(q.errors->at.data()), q.errors->bytes()};
+        c.errors_owner = q.errors;
       }
       if (q.edges) {
         for (size_t side = 0; side < 4; ++side) c.sides[side] = q.edges->side[side].values();

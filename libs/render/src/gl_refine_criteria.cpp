@@ -1,5 +1,8 @@
 #include "relief/render/gl_refine_criteria.h"
 
+#include <list>
+#include <map>
+
 #include <fmt/format.h>
 
 #include "gl_backend.h"
@@ -8,9 +11,73 @@
 
 namespace relief::render {
 
+namespace {
+
+// Diamond errors kept on the GPU between frames, by their owner (one per
+// data tile), under a byte budget: a view that does not change uploads none
+// again. Keyed by the owner's control block (owner_less), not its address:
+// an entry keeps its weak reference, so errors made later for another tile
+// never match it, even at the same address. Entries whose owner expired go
+// at the end of the next frame.
+class ResidentErrors {
+ public:
+  explicit ResidentErrors(uint64_t budget) : budget_(budget) {}
+
+  // The buffer holding q's errors, uploaded if it is not there yet.
+  GLuint buffer(const lod::CriterionQuad& q, gl::Uploads& uploads) {
+    auto it = entries_.find(q.errors_owner);
+    if (it == entries_.end()) {
+      Entry e;
+      e.buffer = gl::Buffer::make_static(q.errors.data(), q.errors.size(), uploads);
+      bytes_ += q.errors.size();
+      it = entries_.emplace(std::weak_ptr<const void>(q.errors_owner), std::move(e)).first;
+      lru_.push_front(it);
+      it->second.at = lru_.begin();
+    } else {
+      lru_.splice(lru_.begin(), lru_, it->second.at);
+    }
+    it->second.frame = frame_;
+    return it->second.buffer.id();
+  }
+
+  // After a frame: the expired go, then the least recently used over the
+  // budget, except the frame's own.
+  void end_frame() {
+    for (auto it = entries_.begin(); it != entries_.end();) {
+      it = it->first.expired() ? drop(it) : std::next(it);
+    }
+    while (bytes_ > budget_ && !lru_.empty() && lru_.back()->second.frame != frame_) {
+      drop(lru_.back());
+    }
+    ++frame_;
+  }
+  uint64_t bytes() const { return bytes_; }
+
+ private:
+  struct Entry;
+  using Entries = std::map<std::weak_ptr<const void>, Entry, std::owner_less<>>;
+  struct Entry {
+    gl::Buffer buffer;
+    std::list<Entries::iterator>::iterator at;
+    uint64_t frame = 0;
+  };
+  Entries::iterator drop(Entries::iterator it) {
+    bytes_ -= it->second.buffer.size();
+    lru_.erase(it->second.at);
+    return entries_.erase(it);
+  }
+  uint64_t budget_, bytes_ = 0, frame_ = 0;
+  Entries entries_;
+  std::list<Entries::iterator> lru_;  // most recent first
+};
+
+}  // namespace
+
 struct GlRefineCriteria::Impl {
+  explicit Impl(uint64_t budget) : resident(budget) {}
   gl::Program program;
-  gl::Buffer errors, grid, sides, classes, class_offsets;
+  ResidentErrors resident;
+  gl::Buffer grid, sides, classes, class_offsets;
   gl::Uploads uploads;
   uint64_t read = 0;
   std::vector<double> grid_values;
@@ -53,7 +120,7 @@ struct GlRefineCriteria::Impl {
     set("cell", q.cell);
     set("level_error", q.level_error);
     set("has_errors", q.errors.empty() ? 0 : 1);
-    if (!q.errors.empty()) errors.write(q.errors.data(), q.errors.size(), uploads);
+    const GLuint errors = q.errors.empty() ? 0 : resident.buffer(q, uploads);
     grid_values.assign(q.steps.begin(), q.steps.end());
     set("spreads_at", static_cast<int>(grid_values.size()));
     grid_values.insert(grid_values.end(), q.spreads.begin(), q.spreads.end());
@@ -76,7 +143,7 @@ struct GlRefineCriteria::Impl {
       const std::vector<uint8_t> zero(words * 4u);
       classes.write(zero.data(), zero.size(), uploads);
     }
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, q.errors.empty() ? grid.id() : errors.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, errors ? errors : grid.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, grid.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, sides.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, classes.id());
@@ -93,8 +160,8 @@ struct GlRefineCriteria::Impl {
 GlRefineCriteria::GlRefineCriteria(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 GlRefineCriteria::~GlRefineCriteria() = default;
 
-Result<std::unique_ptr<GlRefineCriteria>> GlRefineCriteria::create() {
-  auto impl = std::make_unique<Impl>();
+Result<std::unique_ptr<GlRefineCriteria>> GlRefineCriteria::create(uint64_t budget_bytes) {
+  auto impl = std::make_unique<Impl>(budget_bytes);
   auto program = gl::Program::link_compute(kRefineCriteriaShader);
   if (!program) return fail("the refinement's criterion shader: " + program.error().message);
   impl->program = std::move(*program);
@@ -111,7 +178,13 @@ Status GlRefineCriteria::evaluate(const lod::CriterionFrame& frame,
   const uint32_t slots = frame.class_offsets.back();
   classes.resize(quads.size());
   impl_->set_frame(frame);
-  for (size_t i = 0; i < quads.size(); ++i) impl_->evaluate(quads[i], slots, classes[i]);
+  for (size_t i = 0; i < quads.size(); ++i) {
+    if (!quads[i].errors.empty() && !quads[i].errors_owner) {
+      return fail("GL refinement criteria: a quad's diamond errors have no owner");
+    }
+    impl_->evaluate(quads[i], slots, classes[i]);
+  }
+  impl_->resident.end_frame();
   glUseProgram(0);
   if (const GLenum e = glGetError(); e != GL_NO_ERROR) {
     return fail(fmt::format("GL refinement criteria: GL error 0x{:x}", e));
@@ -124,6 +197,9 @@ uint64_t GlRefineCriteria::bytes_uploaded() const {
 }
 uint64_t GlRefineCriteria::bytes_read() const {
   return impl_->read;
+}
+uint64_t GlRefineCriteria::resident_bytes() const {
+  return impl_->resident.bytes();
 }
 
 }  // namespace relief::render

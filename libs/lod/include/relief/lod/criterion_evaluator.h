@@ -8,6 +8,7 @@
 // the mesh is the one it makes alone, bit for bit.
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <vector>
 
@@ -27,7 +28,11 @@ struct CriterionQuad {
   double level_error = 0;      // metres, added to every diamond's error
   // Per slot, 8 bytes: a float (the diamond's error, metres), then two int16
   // (its lowest and highest height, metres). Empty: no data (all zero).
+  // They never change while their owner lives (one per data tile, shared by
+  // the quads of that tile): an evaluator may keep a copy, keyed by the
+  // owner, as long as a weak reference to it has not expired.
   std::span<const uint8_t> errors;
+  std::shared_ptr<const void> errors_owner;
   // West, east, north, south: metres by which the side's grid points move
   // by taking a coarser neighbour's data, by their y (west, east) or x;
   // empty where the side keeps its own data.

@@ -7,6 +7,7 @@
 // evaluates that one itself), so the mesh is the CPU's bit for bit.
 //
 // Used on the thread that owns the GL context, as the renderer.
+#include <cstdint>
 #include <memory>
 
 #include "relief/base/result.h"
@@ -16,8 +17,11 @@ namespace relief::render {
 
 class GlRefineCriteria final : public lod::CriterionEvaluator {
  public:
-  // Compiles the shader in the calling thread's current GL context.
-  static Result<std::unique_ptr<GlRefineCriteria>> create();
+  // Compiles the shader in the calling thread's current GL context. The
+  // tiles' diamond errors stay on the GPU between frames within
+  // `budget_bytes` (a frame's own may exceed it).
+  static Result<std::unique_ptr<GlRefineCriteria>> create(uint64_t budget_bytes = uint64_t{256}
+                                                                                  << 20);
   ~GlRefineCriteria() override;
 
   Status evaluate(const lod::CriterionFrame& frame, std::span<const lod::CriterionQuad> quads,
@@ -26,6 +30,7 @@ class GlRefineCriteria final : public lod::CriterionEvaluator {
   // Bytes sent to the GPU and read back since creation.
   uint64_t bytes_uploaded() const;
   uint64_t bytes_read() const;
+  uint64_t resident_bytes() const;  // diamond errors kept on the GPU
 
  private:
   struct Impl;
