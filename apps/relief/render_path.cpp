@@ -43,6 +43,9 @@ struct PathOptions {
   double until_complete = 0;
   int max_frames = kDefaultMaxFrames;
   std::string events, stats;
+  // --error-samples: finest samples whose projected error each frame's
+  // statistics measure (0: none).
+  int error_samples = 500;
   bool frames = true;
   bool movie = false;  // -o *.mp4: complete frames encoded into one file
   video::VideoOptions video;
@@ -84,6 +87,7 @@ Result<PathOptions> parse_path_options(const Args& args) {
   if (auto n = RELIEF_TRY(args.get_int("--max-frames", 1, 100000000))) o.max_frames = *n;
   o.events = args.get("--events").value_or("");
   o.stats = args.get("--stats").value_or("");
+  if (auto n = RELIEF_TRY(error_samples(args))) o.error_samples = *n;
   o.frames = !args.has("--no-frames");
   o.movie = is_movie_output(*args.get("--output"));
   if (!o.movie) {
@@ -281,8 +285,10 @@ int render_path(const Args& args, RenderSetup& setup, const Clock& clock) {
          {{"measured", terrain.error_counts().measured},
           {"prepared", terrain.error_counts().prepared}}}};
     if (r.report.refine) f["refine"] = refine_json(r.report);
-    if (!options->stats.empty()) {  // measured, not the bound: a lower bound of the true maximum
-      const lod::MeasuredError e = RELIEF_TRY((*scene)->measure_last_frame(camera, 500));
+    // Measured, not the bound: a lower bound of the true maximum.
+    if (!options->stats.empty() && options->error_samples > 0) {
+      const lod::MeasuredError e =
+          RELIEF_TRY((*scene)->measure_last_frame(camera, options->error_samples));
       f["measured_error"] = {{"max_pixels", e.max_pixels}, {"samples", e.samples}};
     }
     if (loader) f["memory"] = loader_json(loader->stats());

@@ -290,6 +290,12 @@ Result<lod::Camera> parse_camera(const Args& args, const RenderSetup& s) {
                       s.height);
 }
 
+Result<std::optional<int>> error_samples(const Args& args) {
+  auto n = RELIEF_TRY(args.get_int("--error-samples", 0, 1000000));
+  if (n && !args.get("--stats")) return fail("--error-samples: only with --stats");
+  return n;
+}
+
 Status write_png(const std::string& path, std::span<const uint8_t> rgba, int width, int height) {
   tiles::Raster image(tiles::SampleType::UInt8, 4, width, height);
   std::copy(rgba.begin(), rgba.end(), image.u8().begin());

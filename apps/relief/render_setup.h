@@ -80,6 +80,9 @@ view::SceneOptions scene_options(const RenderSetup& setup);
 
 // A camera from --camera or --look-at values, with the setup's viewport.
 Result<lod::Camera> parse_camera(const Args& args, const RenderSetup& setup);
+
+// --error-samples N (0 to 10^6; only with --stats), if given.
+Result<std::optional<int>> error_samples(const Args& args);
 // A camera [lon, lat, height, heading, pitch, roll] checked against the same
 // bounds as --camera; errors start with `where` (an option or a keyframe).
 Result<lod::Camera> camera_from_values(const std::string& where, const std::vector<double>& v,

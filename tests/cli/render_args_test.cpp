@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <fmt/format.h>
+#include <nlohmann/json.hpp>
 
 #include "relief/base/file_io.h"
 #include "test_support.h"
@@ -20,14 +21,40 @@ class RenderArgs : public ::testing::Test {
                           store_, "--min-level", "8", "-q"})
                   .exit_code,
               0);
+    whole_ = (dir_->path() / "whole").string();
+    ASSERT_EQ(run_relief({"build", data("srtm/N42E001.hgt.zip"), "--kind", "elevation", "-o",
+                          whole_, "-q"})
+                  .exit_code,
+              0);
   }
   static void TearDownTestSuite() {
     delete dir_;
     dir_ = nullptr;
   }
   static inline ScratchDir* dir_ = nullptr;
-  static inline std::string store_;
+  static inline std::string store_;  // levels 8..10 (--min-level 8)
+  static inline std::string whole_;  // levels 0..10
 };
+
+// A store built from level 8 down has no tiles above it: quads there draw
+// no data, so the selection splits them wherever the data lies below. Where
+// the whole pyramid draws levels 8 and finer, the same image.
+TEST_F(RenderArgs, AStoreBuiltFromALevelDownDrawsAsTheWholePyramid) {
+  for (const char* look_at : {"1.5,42.5,1500,30000,20,-35", "1.2,42.2,1000,8000,200,-20"}) {
+    std::vector<std::vector<std::byte>> images;
+    for (const std::string& store : {store_, whole_}) {
+      const std::string out = (dir_->path() / "levels.png").string();
+      auto r = run_relief({"render", store, "-o", out, "--look-at", look_at, "--size", "320x240",
+                           "--stats", (dir_->path() / "levels.json").string()},
+                          kNoMesaLeakReport);
+      ASSERT_EQ(r.exit_code, 0) << r.err;
+      auto bytes = read_file(out);
+      ASSERT_TRUE(bytes) << bytes.error().message;
+      images.push_back(std::move(*bytes));
+    }
+    EXPECT_EQ(images[0], images[1]) << look_at;
+  }
+}
 
 TEST_F(RenderArgs, ImpossibleCameraValuesNameTheArgument) {
   const std::string out = (dir_->path() / "frame.png").string();
@@ -94,6 +121,34 @@ TEST_F(RenderArgs, RefineThreadsAndTheGlCriteriaDrawTheSameImage) {
   ASSERT_GT(images[0].size(), 1000u);
   EXPECT_EQ(images[0], images[1]);
   EXPECT_EQ(images[0], images[2]);
+}
+
+// A still's statistics measure 20 000 finest samples, or --error-samples.
+TEST_F(RenderArgs, ErrorSamplesSetTheStillsMeasurement) {
+  for (const char* n : {"", "0", "30"}) {
+    const std::string out = (dir_->path() / "samples.png").string();
+    const std::string stats = (dir_->path() / "samples.json").string();
+    std::vector<std::string> args = {
+        "render", store_,    "-o",      out,  "--look-at", "1.5,42.5,1500,30000,20,-35",
+        "--size", "160x120", "--stats", stats};
+    if (*n) args.insert(args.end(), {"--error-samples", n});
+    auto r = run_relief(args, kNoMesaLeakReport);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    auto text = read_file(stats);
+    ASSERT_TRUE(text) << text.error().message;
+    const auto json = nlohmann::json::parse(
+        std::string(reinterpret_cast<const char*>(text->data()), text->size()));
+    if (std::string(n) == "0") {
+      EXPECT_FALSE(json.contains("measured_error"));
+    } else {
+      const int samples = json["measured_error"]["samples"].get<int>();
+      EXPECT_GT(samples, 0);
+      EXPECT_LE(samples, *n ? 30 : 20000);
+      if (!*n) {
+        EXPECT_GT(samples, 30);
+      }
+    }
+  }
 }
 
 TEST_F(RenderArgs, AnUnknownLodModeNamesTheModes) {

@@ -408,6 +408,32 @@ TEST_F(StreamingRenderTest, ServedStoresStreamAndAServerThatDiesIsSurvived) {
   EXPECT_EQ(count_colour(frame("dying", 30), 255, 0, 255), 0u);
 }
 
+// --error-samples sets how many finest samples each frame's statistics
+// compare with the drawn mesh; 0 measures none.
+TEST_F(StreamingRenderTest, ErrorSamplesSetEachFramesMeasurement) {
+  // Straight down from 30 km: most samples of the drawn quads are on screen.
+  const std::string down = still("[1.5, 42.5, 30000, 0, -90, 0]");
+  for (const int n : {0, 40}) {
+    const json s = render_path(fmt::format("samples-{}", n), down,
+                               {"--mode", "complete", "--error-samples", std::to_string(n)});
+    ASSERT_FALSE(s["frames"].empty());
+    for (const json& f : s["frames"]) {
+      if (n == 0) {
+        EXPECT_FALSE(f.contains("measured_error"));
+      } else {
+        ASSERT_TRUE(f.contains("measured_error"));
+        EXPECT_LE(f["measured_error"]["samples"].get<int>(), n);
+      }
+    }
+  }
+  // The default, 500: more than 40 on screen in some frame.
+  const json s = render_path("samples-default", down, {"--mode", "complete"});
+  int most = 0;
+  for (const json& f : s["frames"])
+    most = std::max(most, f["measured_error"]["samples"].get<int>());
+  EXPECT_GT(most, 40);
+}
+
 TEST_F(StreamingRenderTest, BadPathsAndOptionsAreOneLineErrors) {
   const fs::path bad = scratch("bad.json"), out = scratch("bad");
   auto run = [&](const std::string& text, std::vector<std::string> extra = {}) {
@@ -440,6 +466,9 @@ TEST_F(StreamingRenderTest, BadPathsAndOptionsAreOneLineErrors) {
   EXPECT_TRUE(is_one_line_error(run(ok, {"--camera", kGroundStill}), "--path replaces"));
   EXPECT_TRUE(is_one_line_error(run(ok, {"--full-resolution"}), "--full-resolution"));
   EXPECT_TRUE(is_one_line_error(run(ok, {"--loads", "0"}), "--loads"));
+  EXPECT_TRUE(is_one_line_error(run(ok, {"--error-samples", "-1"}), "--error-samples"));
+  EXPECT_TRUE(
+      is_one_line_error(run(ok, {"--error-samples", "5"}), "--error-samples: only with --stats"));
   // A path of 1e12 s would render until killed: refused, naming the file.
   EXPECT_TRUE(is_one_line_error(
       run("{\"fps\": 30, \"keyframes\": [{\"time\": 0, \"camera\": [1, 42, 3000, 0, -30, 0]},"

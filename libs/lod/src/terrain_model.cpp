@@ -200,10 +200,17 @@ float TerrainModel::bilinear(const tiles::Raster& r, int border, double x, doubl
   return top + (bottom - top) * fy;
 }
 
+bool TerrainModel::above_the_data(const geo::TileKey& key) const {
+  return store_ && key.level < store_->manifest().min_level &&
+         key.bounds().intersects(store_->manifest().extent);
+}
+
 Result<HeightRange> TerrainModel::subtree_range(const geo::TileKey& key) {
   if (auto it = subtree_.find(key); it != subtree_.end()) return it->second;
   HeightRange r{0, 0};
-  if (store_ && key.level <= data_max_) {
+  if (above_the_data(key)) {  // the children's, and 0 where they have none
+    for (int c = 0; c < 4; ++c) r = unite(r, RELIEF_TRY(subtree_range(key.child(c & 1, c >> 1))));
+  } else if (store_ && key.level <= data_max_) {
     if (const tiles::IndexEntry* e = store_->index(key.level).find(key)) {
       HeightRange own{e->min, e->max};
       if (e->valid_count < static_cast<uint32_t>(width_ * height_)) own = unite(own, {0, 0});
@@ -274,6 +281,8 @@ bool TerrainModel::data_resident(const geo::TileKey& key) {
 
 Result<double> TerrainModel::level_error(const geo::TileKey& key) {
   if (key.level >= data_max_ || !store_ || draws_ancestor(key)) return 0.0;
+  // No data drawn where the data lies below: no bound but splitting.
+  if (above_the_data(key)) return INFINITY;
   return subtree_error(key);
 }
 

@@ -173,6 +173,9 @@ class TerrainModel {
   Result<double> mesh_error(const geo::TileKey& key);
   Result<HeightRange> subtree_range(const geo::TileKey& key);
   double subtree_error(const geo::TileKey& key);
+  // A quad above the store's coarsest level (relief build --min-level) over
+  // its data: it has no tile, the data lies below it.
+  bool above_the_data(const geo::TileKey& key) const;
   Result<double> exact_mesh_error(const geo::TileKey& key);
   // Has the provider measure the exact errors of every quad of a finest tile
   // on its own threads when it decodes the tile.
