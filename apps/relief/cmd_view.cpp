@@ -270,6 +270,8 @@ nlohmann::json stats_json(const window::ViewerSummary& s, const std::string& ren
                        {{"ms", f.refine_ms},
                         {"cpu_ms", f.refine_cpu_ms},
                         {"marks_evaluated", f.marks_evaluated},
+                        {"criteria_ms", f.criteria_ms},
+                        {"marks_near", f.marks_near},
                         {"marks_reused", f.marks_reused},
                         {"quads_reused", f.quads_reused},
                         {"tiles_measured", f.tiles_measured}}},

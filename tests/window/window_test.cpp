@@ -753,6 +753,30 @@ TEST(ViewCommand, AWindowFrameEqualsTheHeadlessStillOfItsCamera) {
   EXPECT_LT(mean, 0.05);
 }
 
+// The viewer with the split criteria in the compute shader (in the window's
+// own GL context) draws the mesh of the CPU's refinement: the same pixels.
+TEST(ViewCommand, TheSplitCriteriaOnTheGpuDrawTheFrameOfTheCpu) {
+  ScratchDir dir("view_gl_criteria");
+  const std::string size = fmt::format("{}x{}", kWidth, kHeight);
+  std::vector<testing::Image> shots;
+  for (const char* lod : {"edge-marks", "edge-marks-gl"}) {
+    const auto shot = dir / (std::string(lod) + ".png"), stats = dir / (std::string(lod) + ".json");
+    auto r = run_relief({"view", store_path(), "--look-at", kLookAt, "--size", size,
+                         "--exit-when-done", "--until-complete", "300", "--no-vsync", "--lod", lod,
+                         "--screenshot", shot.string(), "--stats", stats.string()},
+                        kNoMesaLeakReport);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    shots.push_back(testing::read_png(shot, kWidth, kHeight));
+    std::ifstream in(stats);
+    const json s = json::parse(in);
+    const json& last = s["frames"].back()["refine"];
+    EXPECT_EQ(last["criteria_ms"].get<double>() > 0, std::string(lod) == "edge-marks-gl") << lod;
+    EXPECT_EQ(last["marks_near"].get<uint64_t>(), 0u);
+  }
+  double mean = 0;
+  EXPECT_EQ(max_channel_difference(shots[0], shots[1], &mean), 0);
+}
+
 void write_path(const std::filesystem::path& file) {
   std::ofstream(file) << R"({"fps": 30, "keyframes": [
     {"time": 0, "camera": [1.40, 42.40, 6000, 20, -35, 0]},

@@ -357,6 +357,8 @@ Result<bool> Viewer::frame() {
       f.refine_ms = report.refine->seconds * 1e3;
       f.refine_cpu_ms = report.refine->cpu_seconds * 1e3;
       f.marks_evaluated = report.refine->marks_evaluated;
+      f.criteria_ms = report.refine->criteria_seconds * 1e3;
+      f.marks_near = report.refine->marks_near;
       f.marks_reused = report.refine->marks_reused;
       f.quads_reused = report.refine->quads_reused;
       f.tiles_measured = report.refine->tiles_measured;

@@ -102,6 +102,10 @@ struct ViewerFrame {
   // whose last decisions were reused (lod::RefineHistory).
   double refine_ms = 0, refine_cpu_ms = 0;
   uint64_t marks_evaluated = 0, marks_reused = 0;
+  // --lod edge-marks-gl: the compute shader's time, and the diamonds it left
+  // to the CPU (too near the threshold).
+  double criteria_ms = 0;
+  uint64_t marks_near = 0;
   uint32_t quads_reused = 0;
   // Data tiles whose diamond errors the refinement measured on the render
   // thread (not prepared by the loaders, or dropped by the cache's budget).
