@@ -164,6 +164,8 @@ int render_still(const Args& args, RenderSetup& setup) {
   }
   auto camera = parse_camera(args, setup);
   if (!camera) return report_error(camera.error().message);
+  auto samples = error_samples(args);  // checked before anything is drawn or written
+  if (!samples) return report_error(samples.error().message);
   auto view = lod::make_view(*camera);
   if (!view) return report_error(view.error().message);
   if (const tiles::Store* store = elevation_of(setup)) {
@@ -198,8 +200,6 @@ int render_still(const Args& args, RenderSetup& setup) {
   }
   if (auto path = args.get("--stats")) {
     nlohmann::json stats = stats_json((*scene)->last_selection(), frame->draw);
-    auto samples = error_samples(args);
-    if (!samples) return report_error(samples.error().message);
     if (const int n = samples->value_or(20000); n > 0) {
       auto measured = (*scene)->measure_last_frame(*camera, n);
       if (!measured) return report_error(measured.error().message);

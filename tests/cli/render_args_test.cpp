@@ -88,6 +88,11 @@ TEST_F(RenderArgs, ImpossibleCameraValuesNameTheArgument) {
       {{"--camera", "1.5,42.5,5000,0,-30,0", "--refine-threads", "65"}, "--refine-threads"},
       {{"--camera", "1.5,42.5,5000,0,-30,0", "--refine-threads", "-1"}, "--refine-threads"},
       {{"--camera", "1.5,42.5,5000,0,-30,0", "--refine-threads", "two"}, "--refine-threads"},
+      {{"--camera", "1.5,42.5,5000,0,-30,0", "--error-samples", "5"},
+       "--error-samples: only with --stats"},
+      {{"--camera", "1.5,42.5,5000,0,-30,0", "--error-samples", "-1", "--stats",
+        (dir_->path() / "never.json").string()},
+       "--error-samples"},
   };
   for (const auto& c : cases) {
     std::vector<std::string> args = {"render", store_, "-o", out};
@@ -98,6 +103,7 @@ TEST_F(RenderArgs, ImpossibleCameraValuesNameTheArgument) {
         << c.args.front() << " " << c.args[1] << ": exit " << r.exit_code << ", " << r.err;
   }
   EXPECT_FALSE(fs::exists(out));
+  EXPECT_FALSE(fs::exists(dir_->path() / "never.json"));
 }
 
 // The refinement in lanes makes the mesh of one thread, and so does the

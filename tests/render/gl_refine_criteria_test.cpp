@@ -119,6 +119,48 @@ TEST(GlRefineCriteria, AStaticViewUploadsTheDiamondErrorsOnce) {
   }
 }
 
+// Decides every diamond "over the threshold", whatever the shader says.
+struct EverythingOver final : lod::CriterionEvaluator {
+  Status evaluate(const lod::CriterionFrame& frame, std::span<const lod::CriterionQuad> quads,
+                  std::vector<std::vector<uint8_t>>& classes) override {
+    RELIEF_CHECK(criteria().evaluate(frame, quads, classes));
+    for (auto& c : classes) std::fill(c.begin(), c.end(), uint8_t(lod::CriterionClass::kOver));
+    return {};
+  }
+};
+
+// The refinement decides by the evaluator's classes, with a history given
+// too (as view::Scene refines: nothing is recorded then, since recording
+// would evaluate every criterion again on the CPU), in lanes too.
+TEST(GlRefineCriteria, TheRefinementDecidesByTheClassesWithAHistoryAndInLanes) {
+  const Case& c = case_named("down");
+  Terrain& t = c.terrain();
+  auto view = lod::make_view(c.camera);
+  ASSERT_TRUE(view);
+  const lod::Selection s = select(t, *view, c.pixel_error);
+  const lod::RefinedMesh cpu = refined(t, *view, s, c.pixel_error, lod::RefineVariant::kTopDown);
+  lod::RefineHistory history;
+  PooledExecutor lanes(2);
+  EverythingOver over;
+  for (Executor* executor : {static_cast<Executor*>(nullptr), static_cast<Executor*>(&lanes)}) {
+    lod::RefineOptions o;
+    o.pixel_error = c.pixel_error;
+    o.cache = &t.cache;
+    o.history = &history;
+    o.executor = executor;
+    o.criteria = &criteria();
+    for (int frame = 0; frame < 2; ++frame) {
+      auto gpu = lod::refine(*view, t.terrain, s, o);
+      ASSERT_TRUE(gpu) << gpu.error().message;
+      EXPECT_EQ(gpu->indices, cpu.indices);
+    }
+    o.criteria = &over;
+    auto all = lod::refine(*view, t.terrain, s, o);
+    ASSERT_TRUE(all) << all.error().message;
+    EXPECT_GT(all->triangles(), 4 * cpu.triangles());
+  }
+}
+
 TEST(GlRefineCriteria, AGridWithoutClassesIsAnError) {
   lod::View view;
   lod::CriterionFrame f;

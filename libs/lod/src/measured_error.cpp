@@ -41,8 +41,9 @@ class Coverage {
     const geo::GeoBox kb = k.bounds();
     const double x = (lon - kb.west) / kb.width() * w, y = (kb.north - lat) / kb.height() * h;
     if (full(k) && x >= 1.5 && y >= 1.5 && x <= w - 1.5 && y <= h - 1.5) return true;
-    // A level above the store's coarsest draws no data (only interactive
-    // frames, waiting for the tiles below, draw such a quad).
+    // No tile of its own: a level above the store's coarsest, which draws no
+    // data (only interactive frames waiting for the tiles below draw one),
+    // or a hole of a store of sparse depth (left out: conservative).
     if (!decode_ || !store_.has_tile(k)) return false;
     return tiles::full_mesh_stencil_valid(*RELIEF_TRY(raw(k)), b, x, y);
   }

@@ -639,6 +639,7 @@ class Refiner {
   // refinement), each quad's inputs as pixels() reads them.
   Status evaluate_criteria(CriterionEvaluator& evaluator,
                            std::vector<std::vector<uint8_t>>& classes) {
+    if (grid_.classes() == 0) return {};  // nothing to decide but the roots
     const int32_t n = grid_.n();
     const int k = grid_.k();
     std::vector<uint32_t> offsets;
@@ -1786,7 +1787,11 @@ Result<RefinedMesh> refine(const View& view, TerrainModel& terrain, const Select
   thread_local StepTables steps;
   thread_local size_t last_indices = 0;
   RefineOptions o = options;
-  RefineHistory::Impl* history = options.history ? &options.history->impl() : nullptr;
+  // With the criteria evaluated elsewhere nothing is recorded: a recorded
+  // decision's margins need the CPU's terms of its criterion (pixels() with
+  // `out`), which would evaluate every criterion a second time.
+  if (o.criteria) o.history = nullptr;
+  RefineHistory::Impl* history = o.history ? &o.history->impl() : nullptr;
   if (history) {
     const RefineHistory::Impl::Seen seen{view.eye, view.right, view.up, view.forward,
                                          options.pixel_error};

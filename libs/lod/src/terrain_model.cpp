@@ -208,7 +208,7 @@ bool TerrainModel::above_the_data(const geo::TileKey& key) const {
 Result<HeightRange> TerrainModel::subtree_range(const geo::TileKey& key) {
   if (auto it = subtree_.find(key); it != subtree_.end()) return it->second;
   HeightRange r{0, 0};
-  if (above_the_data(key)) {  // the children's, and 0 where they have none
+  if (above_the_data(key)) {  // the children's, with 0 (drawn where no child has data)
     for (int c = 0; c < 4; ++c) r = unite(r, RELIEF_TRY(subtree_range(key.child(c & 1, c >> 1))));
   } else if (store_ && key.level <= data_max_) {
     if (const tiles::IndexEntry* e = store_->index(key.level).find(key)) {
@@ -312,8 +312,10 @@ Result<double> TerrainModel::mesh_error(const geo::TileKey& key) {
     // estimate, the error of the ancestor whose samples are as far apart as
     // this mesh's vertices (replaced by the bound once the tile is resident).
     const int coarser = std::max(0, static_cast<int>(std::log2(height_)) - mesh_.refinement());
+    // (Not above the store's coarsest level: no data there, no bound.)
+    const int top = store_ ? std::min(key.level, store_->manifest().min_level) : 0;
     geo::TileKey a = key;
-    for (int i = 0; i < coarser && a.level > 0; ++i) a = *a.parent();
+    for (int i = 0; i < coarser && a.level > top; ++i) a = *a.parent();
     return error + RELIEF_TRY(level_error(a));
   }
   return error + RELIEF_TRY(level_error(key)) + RELIEF_TRY(exact_mesh_error(key));

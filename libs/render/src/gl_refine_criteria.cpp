@@ -1,5 +1,6 @@
 #include "relief/render/gl_refine_criteria.h"
 
+#include <algorithm>
 #include <list>
 #include <map>
 
@@ -149,7 +150,9 @@ struct GlRefineCriteria::Impl {
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, classes.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 4, class_offsets.id());
     glUseProgram(program.id());
-    glDispatchCompute((words + 63) / 64, 1, 1);
+    // At most 65 535 groups along x (the least GL guarantees): rows of them.
+    const GLuint groups = (words + 63) / 64, row = std::min<GLuint>(groups, 65535);
+    glDispatchCompute(row, (groups + row - 1) / row, 1);
     glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
     out.resize(words * 4u);
     glGetNamedBufferSubData(classes.id(), 0, static_cast<GLsizeiptr>(words) * 4, out.data());
@@ -171,19 +174,22 @@ Result<std::unique_ptr<GlRefineCriteria>> GlRefineCriteria::create(uint64_t budg
 Status GlRefineCriteria::evaluate(const lod::CriterionFrame& frame,
                                   std::span<const lod::CriterionQuad> quads,
                                   std::vector<std::vector<uint8_t>>& classes) {
-  if (frame.class_offsets.size() < 2 || frame.class_offsets.size() > 65) {
+  const size_t class_count = frame.class_offsets.empty() ? 0 : frame.class_offsets.size() - 1;
+  if (class_count < 1 || class_count > 64) {
     return fail(fmt::format("GL refinement criteria: {} classes of diamonds (1 to 64 supported)",
-                            frame.class_offsets.size() - 1));
+                            class_count));
   }
+  for (const lod::CriterionQuad& q : quads) {
+    if (!q.errors.empty() && !q.errors_owner) {
+      return fail("GL refinement criteria: a quad's diamond errors have no owner");
+    }
+  }
+  while (glGetError() != GL_NO_ERROR) {
+  }  // errors left by others are not this evaluation's
   const uint32_t slots = frame.class_offsets.back();
   classes.resize(quads.size());
   impl_->set_frame(frame);
-  for (size_t i = 0; i < quads.size(); ++i) {
-    if (!quads[i].errors.empty() && !quads[i].errors_owner) {
-      return fail("GL refinement criteria: a quad's diamond errors have no owner");
-    }
-    impl_->evaluate(quads[i], slots, classes[i]);
-  }
+  for (size_t i = 0; i < quads.size(); ++i) impl_->evaluate(quads[i], slots, classes[i]);
   impl_->resident.end_frame();
   glUseProgram(0);
   if (const GLenum e = glGetError(); e != GL_NO_ERROR) {

@@ -58,7 +58,10 @@ void angle_bounds(dvec3 up, double cos_spread, double sin_spread, out double s, 
   c = max(abs(cos_lo), abs(cos_hi));
 }
 
-double criterion(uint slot) {
+// `slack`: pixels by which the CPU's value may differ beyond the relative
+// band (below).
+double criterion(uint slot, out double slack) {
+  slack = 0.0LF;
   int c = 0;
   while (c + 1 < class_count && uint(offsets[c + 1]) <= slot) ++c;
   const bool diagonal = c % 2 == 0;
@@ -135,19 +138,29 @@ double criterion(uint slot) {
   double s, cs;
   angle_bounds(dvec3(cos_lat * cos_lon, cos_lat * sin_lon, sin_lat), grid[spreads_at + 2 * c],
                grid[spreads_at + 2 * c + 1], s, cs);
-  return min(by_distance, pixels_per_radian * metres * (s + t * cs) / z_min);
+  const double by_angle = pixels_per_radian * metres * (s + t * cs) / z_min;
+  // Looking straight at the normal, sin(centre) = sqrt(1 - cos^2) loses
+  // half its digits: the CPU's, from trigonometry instead of angle sums,
+  // may differ by ~2e-8 in absolute terms, which the bound multiplies by
+  // K m / z_min (relative, it can exceed the band near the nadir).
+  if (by_angle < by_distance) slack = pixels_per_radian * metres / z_min * 1.0e-7LF;
+  return min(by_distance, by_angle);
 }
 
 void main() {
+  // Rows of at most 65 535 groups (glDispatchCompute's guaranteed limit).
+  const uint index = gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * 64u;
   uint word = 0u;
   for (uint m = 0u; m < 4u; ++m) {
-    const uint slot = 4u * gl_GlobalInvocationID.x + m;
+    const uint slot = 4u * index + m;
     if (slot >= uint(slot_count)) break;
-    const double v = criterion(slot);
-    const uint cls = v < threshold * (1.0LF - band) ? 0u : v > threshold * (1.0LF + band) ? 1u : 2u;
+    double slack;
+    const double v = criterion(slot, slack);
+    const double margin = threshold * band + slack;
+    const uint cls = v < threshold - margin ? 0u : v > threshold + margin ? 1u : 2u;
     word |= cls << (8u * m);
   }
-  if (4u * gl_GlobalInvocationID.x < uint(slot_count)) classes[gl_GlobalInvocationID.x] = word;
+  if (4u * index < uint(slot_count)) classes[index] = word;
 }
 )";
 

@@ -105,7 +105,8 @@ struct RefineOptions {
   // render::GlRefineCriteria) before the refinement, which then looks the
   // decisions up and evaluates only those too near the threshold: the same
   // mesh, either variant. It evaluates every diamond, as bottom-up does.
-  // Null: the criteria are evaluated here, as reached.
+  // With it, `history` is not used (a recorded decision's margins need the
+  // CPU's own terms). Null: the criteria are evaluated here, as reached.
   CriterionEvaluator* criteria = nullptr;
 };
 
