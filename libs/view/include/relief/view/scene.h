@@ -48,7 +48,7 @@ struct SceneOptions {
   // Every diamond's split criterion evaluated by a GL compute shader
   // (render::GlRefineCriteria, created in the drawing thread's context at the
   // first refinement) before the refinement looks them up: the same mesh.
-  // On llvmpipe it is 10-25 times slower than the CPU's top-down refinement
+  // On llvmpipe it is 20-250 times slower than the CPU's top-down refinement
   // (docs/rendering.md, "Split criteria on the GPU").
   bool refine_on_gpu = false;
   // Edge marks, interactive frames: the quads a frame's refinement wanted
