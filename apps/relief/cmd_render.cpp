@@ -68,7 +68,7 @@ options:
   --lod MODE         edge-marks (default), edge-marks-bottom-up (the same mesh,
                      every mark decided: a reference), edge-marks-gl (every
                      split criterion evaluated by a GL compute shader first:
-                     the same mesh; docs/rendering.md) or quads
+                     the same mesh; docs/refinement.md) or quads
   --mesh-level R     --lod quads: 2^(R+1) x 2^R squares per quad (default 4)
   --full-resolution  every finest sample a vertex (the brute-force reference)
   --sky R,G,B        background colour, 0-255 (default 156,189,224)

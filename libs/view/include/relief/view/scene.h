@@ -49,7 +49,7 @@ struct SceneOptions {
   // (render::GlRefineCriteria, created in the drawing thread's context at the
   // first refinement) before the refinement looks them up: the same mesh.
   // On llvmpipe it is 20-250 times slower than the CPU's top-down refinement
-  // (docs/rendering.md, "Split criteria on the GPU").
+  // (docs/refinement.md, "Split criteria on the GPU").
   bool refine_on_gpu = false;
   // Edge marks, interactive frames: the quads a frame's refinement wanted
   // split (RefineStats::split_wanted), the next frames' selection splits
