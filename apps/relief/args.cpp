@@ -70,6 +70,31 @@ Result<std::optional<int>> Args::get_int(const std::string& name, int lo, int hi
   return std::optional<int>(value);
 }
 
+Result<std::pair<int, int>> parse_int_pair(const std::string& option, const std::string& text,
+                                           char separator, int lo, int hi, std::string_view form) {
+  const auto number = [&](std::string_view digits) -> std::optional<int> {
+    int value = 0;
+    if (digits.empty() || digits.front() < '0' || digits.front() > '9') return std::nullopt;
+    const auto [p, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), value);
+    if (ec != std::errc() || p != digits.data() + digits.size()) return std::nullopt;  // overflow
+    if (value < lo || value > hi) return std::nullopt;
+    return value;
+  };
+  const auto at = text.find(separator);
+  const auto first = number(std::string_view(text).substr(0, at));
+  const auto second =
+      at == std::string::npos ? std::nullopt : number(std::string_view(text).substr(at + 1));
+  if (!first || !second) return fail(fmt::format("{}: '{}' is not {}", option, text, form));
+  return std::pair{*first, *second};
+}
+
+Result<WidthHeight> parse_width_height(const std::string& option, const std::string& text,
+                                       int max) {
+  const auto [width, height] = RELIEF_TRY(parse_int_pair(
+      option, text, 'x', 1, max, fmt::format("WxH between 1x1 and {}x{}", max, max)));
+  return WidthHeight{width, height};
+}
+
 Result<std::optional<double>> Args::get_double(const std::string& name) const {
   auto v = get(name);
   if (!v) return std::optional<double>();

@@ -4,6 +4,8 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <string_view>
+#include <utility>
 #include <vector>
 
 #include "relief/base/result.h"
@@ -37,6 +39,19 @@ class Args {
   std::map<std::string, std::vector<std::string>> all_values_;
   std::vector<std::string> positional_;
 };
+
+// Two integers in lo..hi joined by `separator` ("1280x720", "3/8", "10,20"):
+// decimal digits only (no sign, no space) and no wrap-around (4294967297 is
+// out of range, not 1). The error names `option` and says `form`.
+Result<std::pair<int, int>> parse_int_pair(const std::string& option, const std::string& text,
+                                           char separator, int lo, int hi, std::string_view form);
+
+// "WxH" with both sides in 1..`max`.
+struct WidthHeight {
+  int width = 0;
+  int height = 0;
+};
+Result<WidthHeight> parse_width_height(const std::string& option, const std::string& text, int max);
 
 // "1,2.5,-3" as numbers; `count` > 0 requires exactly that many. Errors name `option`.
 Result<std::vector<double>> parse_numbers(const std::string& option, const std::string& text,

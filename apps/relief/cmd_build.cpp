@@ -12,7 +12,7 @@
 namespace relief::cli {
 
 namespace {
-constexpr const char* kHelp =
+constexpr const char* kBuildHelp =
     R"(usage: relief build INPUT... -o STORE --kind elevation|imagery|sar [options]
 
 Builds a multi-resolution tile pyramid on the WGS84 geographic quadtree from any
@@ -46,10 +46,7 @@ options:
 )";
 
 Result<int> log2_height_from(const std::string& text) {
-  const auto x = text.find('x');
-  if (x == std::string::npos) return fail(fmt::format("--tile-size: '{}' is not WxH", text));
-  const int w = std::atoi(text.substr(0, x).c_str());
-  const int h = std::atoi(text.substr(x + 1).c_str());
+  const auto [w, h] = RELIEF_TRY(parse_width_height("--tile-size", text, 8192));
   for (int k = 1; k <= 12; ++k) {
     if (h == (1 << k) && w == 2 * h) return k;
   }
@@ -58,7 +55,7 @@ Result<int> log2_height_from(const std::string& text) {
 }  // namespace
 
 int run_build(const std::vector<std::string>& argv) {
-  if (wants_help(argv)) return print_help(kHelp);
+  if (wants_help(argv)) return print_help(kBuildHelp);
   auto args = Args::parse(argv,
                           {{"--output", "-o"},
                            {"--kind"},

@@ -1,4 +1,5 @@
 #include <cstdio>
+#include <limits>
 
 #include <fmt/format.h>
 
@@ -11,7 +12,7 @@
 namespace relief::cli {
 
 namespace {
-constexpr const char* kHelp =
+constexpr const char* kDetectHelp =
     R"(usage: relief detect INPUT -o TARGETS.geojson [options]
 
 Finds point-target responses (a bright peak with side lobes along two axes) in
@@ -39,7 +40,7 @@ options:
 }  // namespace
 
 int run_detect(const std::vector<std::string>& argv) {
-  if (wants_help(argv)) return print_help(kHelp);
+  if (wants_help(argv)) return print_help(kDetectHelp);
   auto args = Args::parse(argv,
                           {{"--output", "-o"},
                            {"--level"},
@@ -63,12 +64,10 @@ int run_detect(const std::vector<std::string>& argv) {
   if (auto a = args->get("--analysis")) o.analysis_json = *a;
   if (auto p = args->get("--plot")) o.analysis_png = *p;
   if (auto at = args->get("--analyse")) {
-    int x = 0, y = 0;
-    char end = 0;
-    if (std::sscanf(at->c_str(), "%d,%d%c", &x, &y, &end) != 2 || x < 0 || y < 0) {
-      return report_error("--analyse: '" + *at + "' is not X,Y in pixels");
-    }
-    o.analyse_at = std::pair{x, y};
+    auto xy =
+        parse_int_pair("--analyse", *at, ',', 0, std::numeric_limits<int>::max(), "X,Y in pixels");
+    if (!xy) return report_error(xy.error().message);
+    o.analyse_at = *xy;
   }
   std::vector<Output> outputs = {{"-o", o.geojson.string()}};
   if (!o.analysis_json.empty()) outputs.push_back({"--analysis", o.analysis_json.string()});

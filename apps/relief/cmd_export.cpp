@@ -11,7 +11,8 @@
 namespace relief::cli {
 
 namespace {
-constexpr const char* kHelp = R"(usage: relief export STORE --level L [--bbox W,S,E,N] -o OUT.tif
+constexpr const char* kExportHelp =
+    R"(usage: relief export STORE --level L [--bbox W,S,E,N] -o OUT.tif
 
 Reassembles tile interiors of one level into a GeoTIFF (EPSG:4326, the store's
 sample grid; NaN or alpha marks nodata). The box is snapped outwards to samples.
@@ -32,7 +33,7 @@ Result<geo::GeoBox> parse_bbox(const std::string& text) {
 }  // namespace
 
 int run_export(const std::vector<std::string>& argv) {
-  if (wants_help(argv)) return print_help(kHelp);
+  if (wants_help(argv)) return print_help(kExportHelp);
   auto args = Args::parse(
       argv, {{"--level"}, {"--bbox"}, {"--output", "-o"}, {"--quiet", "-q", false}}, "export");
   if (!args) return report_error(args.error().message);

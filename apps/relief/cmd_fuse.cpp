@@ -8,7 +8,7 @@
 namespace relief::cli {
 
 namespace {
-constexpr const char* kHelp =
+constexpr const char* kFuseHelp =
     R"(usage: relief fuse STORE STORE... -o OUT [--weights W,W,...] [--mode blend|first]
 
 Combines stores of the same kind (elevation, imagery or SAR) tile by tile into
@@ -31,7 +31,7 @@ options:
 }  // namespace
 
 int run_fuse(const std::vector<std::string>& argv) {
-  if (wants_help(argv)) return print_help(kHelp);
+  if (wants_help(argv)) return print_help(kFuseHelp);
   auto args = Args::parse(argv,
                           {{"--output", "-o"},
                            {"--weights"},

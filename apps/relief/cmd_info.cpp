@@ -12,7 +12,7 @@
 namespace relief::cli {
 
 namespace {
-constexpr const char* kHelp = R"(usage: relief info STORE [--json]
+constexpr const char* kInfoHelp = R"(usage: relief info STORE [--json]
 
 Prints the store's manifest, the tiles and bytes per level, and the compression
 ratio against the raw samples (borders included).
@@ -20,7 +20,7 @@ ratio against the raw samples (borders included).
 }  // namespace
 
 int run_info(const std::vector<std::string>& argv) {
-  if (wants_help(argv)) return print_help(kHelp);
+  if (wants_help(argv)) return print_help(kInfoHelp);
   auto args = Args::parse(argv, {{"--json", "", false}}, "info");
   if (!args) return report_error(args.error().message);
   if (args->positional().size() != 1) return report_error("info: expected exactly one STORE");

@@ -16,7 +16,7 @@
 namespace relief::cli {
 
 namespace {
-constexpr const char* kHelp =
+constexpr const char* kProcessHelp =
     R"(usage: relief process INPUT -o OUT.tif --op NAME [--param key=value]... [options]
        relief process STORE -o STORE2 --op NAME [--param key=value]... [options]
        relief process --list
@@ -57,7 +57,7 @@ int print_catalogue() {
 }  // namespace
 
 int run_process(const std::vector<std::string>& argv) {
-  if (wants_help(argv)) return print_help(kHelp);
+  if (wants_help(argv)) return print_help(kProcessHelp);
   // --param may repeat: collect those first, parse the rest normally.
   std::vector<std::string> rest, params;
   for (size_t i = 0; i < argv.size(); ++i) {

@@ -16,7 +16,7 @@
 namespace relief::cli {
 
 namespace {
-constexpr const char* kHelp =
+constexpr const char* kRenderHelp =
     R"(usage: relief render STORE [--imagery STORE2] (--camera C | --look-at L) -o FRAME.png [options]
        relief render STORE [--imagery STORE2] --path PATH.json -o DIR [options]
        relief render STORE [--imagery STORE2] --path PATH.json -o MOVIE.mp4 [options]
@@ -243,7 +243,7 @@ int render_still(const Args& args, RenderSetup& setup) {
 }  // namespace
 
 int run_render(const std::vector<std::string>& command_line) {
-  if (wants_help(command_line)) return print_help(help_with_layer_options(kHelp).c_str());
+  if (wants_help(command_line)) return print_help(help_with_layer_options(kRenderHelp).c_str());
   // Layer options repeat and their order matters: taken out first.
   std::vector<std::string> argv = command_line;
   auto layers = take_layer_options(argv);

@@ -11,7 +11,7 @@
 namespace relief::cli {
 
 namespace {
-constexpr const char* kHelp =
+constexpr const char* kServeHelp =
     R"(usage: relief serve STORE [--port P] [--bind ADDR] [--threads N] [--share I/N]
                     [--max-connections N] [--read-timeout S] [--write-timeout S]
 
@@ -41,7 +41,7 @@ options:
 }  // namespace
 
 int run_serve(const std::vector<std::string>& argv) {
-  if (wants_help(argv)) return print_help(kHelp);
+  if (wants_help(argv)) return print_help(kServeHelp);
   give_up_huge_pages();
   auto args = Args::parse(argv,
                           {{"--port"},
@@ -64,14 +64,13 @@ int run_serve(const std::vector<std::string>& argv) {
   if (!threads) return report_error(threads.error().message);
   o.threads = threads->value_or(16);
   if (auto share = args->get("--share")) {
-    unsigned index = 0, count = 0;
-    char end = 0;
-    if (std::sscanf(share->c_str(), "%u/%u%c", &index, &count, &end) != 2 || count < 1 ||
-        index >= count || count > 4096) {
-      return report_error("--share: '" + *share + "' is not I/N with 0 <= I < N <= 4096");
-    }
-    o.share_index = index;
-    o.share_count = count;
+    const std::string_view form = "I/N with 0 <= I < N <= 4096";
+    auto pair = parse_int_pair("--share", *share, '/', 0, 4096, form);
+    if (pair && pair->first >= pair->second)
+      pair = fail(fmt::format("--share: '{}' is not {}", *share, form));
+    if (!pair) return report_error(pair.error().message);
+    o.share_index = static_cast<unsigned>(pair->first);
+    o.share_count = static_cast<unsigned>(pair->second);
   }
   auto connections = args->get_int("--max-connections", 1, 1 << 20);
   if (!connections) return report_error(connections.error().message);

@@ -8,7 +8,7 @@
 namespace relief::cli {
 
 namespace {
-constexpr const char* kHelp = R"(usage: relief split STORE -o DIR --shares N
+constexpr const char* kSplitHelp = R"(usage: relief split STORE -o DIR --shares N
 
 Spreads a local store over N servers cyclically (seed 000 §3.1): writes
 DIR/share-0 ... DIR/share-(N-1), each with the manifest, every level index and
@@ -28,7 +28,7 @@ options:
 }  // namespace
 
 int run_split(const std::vector<std::string>& argv) {
-  if (wants_help(argv)) return print_help(kHelp);
+  if (wants_help(argv)) return print_help(kSplitHelp);
   auto args = Args::parse(argv, {{"--output", "-o"}, {"--shares"}}, "split");
   if (!args) return report_error(args.error().message);
   if (args->positional().size() != 1) return report_error("split: expected exactly one STORE");

@@ -7,7 +7,7 @@
 namespace relief::cli {
 
 namespace {
-constexpr const char* kHelp = R"(usage: relief upgrade STORE [--threads N] [-q]
+constexpr const char* kUpgradeHelp = R"(usage: relief upgrade STORE [--threads N] [-q]
 
 Brings a local store written by an older relief up to the current store
 format. From format 1: computes every tile's geometric error (elevation
@@ -19,7 +19,7 @@ current format is left alone.
 }  // namespace
 
 int run_upgrade(const std::vector<std::string>& argv) {
-  if (wants_help(argv)) return print_help(kHelp);
+  if (wants_help(argv)) return print_help(kUpgradeHelp);
   auto args = Args::parse(argv, {{"--threads"}, {"--quiet", "-q", false}}, "upgrade");
   if (!args) return report_error(args.error().message);
   if (args->positional().size() != 1) return report_error("upgrade: expected exactly one STORE");

@@ -7,7 +7,7 @@
 namespace relief::cli {
 
 namespace {
-constexpr const char* kHelp = R"(usage: relief verify STORE [--threads N] [-q]
+constexpr const char* kVerifyHelp = R"(usage: relief verify STORE [--threads N] [-q]
 
 Checks the manifest, every level index and every tile (header, checksum,
 payload), and for an elevation store recomputes every tile's geometric error
@@ -17,7 +17,7 @@ non-zero if any is found.
 }  // namespace
 
 int run_verify(const std::vector<std::string>& argv) {
-  if (wants_help(argv)) return print_help(kHelp);
+  if (wants_help(argv)) return print_help(kVerifyHelp);
   auto args = Args::parse(argv, {{"--threads"}, {"--quiet", "-q", false}}, "verify");
   if (!args) return report_error(args.error().message);
   if (args->positional().size() != 1) return report_error("verify: expected exactly one STORE");

@@ -28,7 +28,7 @@ namespace relief::cli {
 
 namespace {
 
-constexpr const char* kHelp =
+constexpr const char* kViewHelp =
     R"(usage: relief view STORE [--imagery STORE2] [--camera C | --look-at L] [options]
        relief view STORE --play PATH.json [--exit-when-done] [--stats STATS.json]
        relief view STORE [--elevation-op OP [--elevation-param K=V]...]... [options]
@@ -65,6 +65,8 @@ options:
                      speed relaxes it; a still view is always drawn at
                      --pixel-error)
   --play PATH.json   play a camera path (the JSON that relief render --path reads)
+  --max-frames N     refuse a --play path of more than N frames at its fps
+                     (default 100000)
   --exit-when-done   quit once the path has ended (at once without --play) and a
                      frame is complete, or --until-complete seconds later
   --until-complete S (default 30)
@@ -186,6 +188,9 @@ Result<window::ViewerOptions> viewer_options(const Args& args, const RenderSetup
         *play, [&](const std::string& where, const std::vector<double>& values) {
           return camera_from_values(where, values, setup);
         }));
+    const int max_frames =
+        RELIEF_TRY(args.get_int("--max-frames", 1, 100000000)).value_or(view::kDefaultMaxFrames);
+    RELIEF_TRY(view::count_path_frames(path.keyframes, path.fps, max_frames, *play));
     o.mode = view::ControlMode::playback;
     o.start = path.keyframes.front().camera;
     o.controller.path = std::move(path.keyframes);
@@ -329,6 +334,12 @@ Status export_recorded_path(const Args& args, RenderSetup& setup, const view::Pa
 int view_session(const Args& args, RenderSetup& setup) {
   auto options = viewer_options(args, setup);
   if (!options) return report_error(options.error().message);
+  // Refused now, not after the session it would have ended.
+  if (auto movie = args.get("--export-movie"); movie && (setup.width % 2 || setup.height % 2)) {
+    return report_error(fmt::format(
+        "--export-movie {}: the window is {}x{}; a movie needs an even width and height", *movie,
+        setup.width, setup.height));
+  }
   options->export_path = [&args, &setup](const view::PathFile& path) {
     return export_recorded_path(args, setup, path);
   };
@@ -395,7 +406,7 @@ int view_session(const Args& args, RenderSetup& setup) {
 
 int run_view(const std::vector<std::string>& command_line) {
   if (wants_help(command_line)) {
-    std::string help = help_with_layer_options(kHelp);
+    std::string help = help_with_layer_options(kViewHelp);
     help.replace(help.find("%UPLOADS%"), 9, std::to_string(kUploadsPerFrame));
     help.replace(help.find("%NICE%"), 6, std::to_string(kViewerLoaderNice));
     return print_help(help.c_str());
@@ -409,6 +420,7 @@ int run_view(const std::vector<std::string>& command_line) {
                                               {"--no-speed-lod", "", false},
                                               {"--target-fps"},
                                               {"--play"},
+                                              {"--max-frames"},
                                               {"--exit-when-done", "", false},
                                               {"--until-complete"},
                                               {"--stats"},

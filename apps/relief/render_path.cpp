@@ -29,10 +29,6 @@ namespace {
 
 using nlohmann::json;
 
-// A path longer than this many frames is refused unless --max-frames allows
-// it: a typo in a keyframe's time (1e12 s) must not render until killed.
-constexpr int kDefaultMaxFrames = 100000;
-
 struct PathOptions {
   bool interactive = true;
   double fps = 0;  // 0: the path's
@@ -41,7 +37,7 @@ struct PathOptions {
   bool prefetch = true;
   double radius = 0;  // > 0: the radius pager
   double until_complete = 0;
-  int max_frames = kDefaultMaxFrames;
+  int max_frames = view::kDefaultMaxFrames;
   std::string events, stats;
   // --error-samples: finest samples whose projected error each frame's
   // statistics measure (0: none).
@@ -61,7 +57,10 @@ Result<PathOptions> parse_path_options(const Args& args) {
     o.interactive = *mode == "interactive";
   }
   if (auto fps = RELIEF_TRY(args.get_double("--fps"))) {
-    if (!(*fps > 0 && *fps <= 1000)) return fail("--fps: must be in (0, 1000]");
+    if (!(*fps >= view::kMinPathFps && *fps <= view::kMaxPathFps)) {
+      return fail(
+          fmt::format("--fps: must be in [{:g}, {:g}]", view::kMinPathFps, view::kMaxPathFps));
+    }
     o.fps = *fps;
   }
   for (auto [name, budget] : {std::pair{"--memory-budget", &o.loader.memory_budget},
@@ -180,16 +179,9 @@ int render_path(const Args& args, RenderSetup& setup, const Clock& clock) {
   const std::vector<lod::Keyframe>& keys = path->keyframes;
   const double path_fps = path->fps;
   const double fps = options->fps > 0 ? options->fps : path_fps;
-  const double duration = keys.back().time - keys.front().time;
-  // In double: a huge duration must not overflow the frame count.
-  const double frame_count = std::floor(duration * fps + 1e-9) + 1;
-  if (!(frame_count <= options->max_frames)) {
-    return report_error(
-        fmt::format("{}: {:.6g} s at {:g} fps is {:.6g} frames, more than "
-                    "--max-frames {} (raise it for longer paths)",
-                    *args.get("--path"), duration, fps, frame_count, options->max_frames));
-  }
-  const auto path_frames = static_cast<size_t>(frame_count);
+  const auto counted = view::count_path_frames(keys, fps, options->max_frames, *args.get("--path"));
+  if (!counted) return report_error(counted.error().message);
+  const size_t path_frames = *counted;
   const std::string out = *args.get("--output");
   std::unique_ptr<video::VideoWriter> movie;
   if (options->movie) {  // created first: an unwritable movie fails before any frame

@@ -113,11 +113,9 @@ Result<RenderSetup> parse_render_setup(const Args& args, TextureLayers textures,
     return fail("--detect: needs a SAR texture layer (--texture SAR_STORE)");
   }
   if (auto size = args.get("--size")) {
-    char x = 0, end = 0;
-    if (std::sscanf(size->c_str(), "%d%c%d%c", &s.width, &x, &s.height, &end) != 3 || x != 'x' ||
-        s.width < 1 || s.height < 1 || s.width > 16384 || s.height > 16384) {
-      return fail("--size: '" + *size + "' is not WxH between 1x1 and 16384x16384");
-    }
+    const auto [width, height] = RELIEF_TRY(parse_width_height("--size", *size, 16384));
+    s.width = width;
+    s.height = height;
   }
   for (auto [name, target, lo, hi] : {std::tuple{"--fov", &s.fov, 1.0, 170.0},
                                       std::tuple{"--pixel-error", &s.pixel_error, 0.05, 1000.0},

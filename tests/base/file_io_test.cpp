@@ -20,7 +20,7 @@ TEST(FileIo, AtomicWriteCreatesDirectoriesAndLeavesNoTemporaries) {
   fs::remove_all(dir);
   ASSERT_TRUE(write_text_file_atomic(dir / "a/b/c.txt", "hello"));
   ASSERT_TRUE(write_text_file_atomic(dir / "a/b/c.txt", "replaced"));
-  EXPECT_EQ(*read_text_file(dir / "a/b/c.txt"), "replaced");
+  EXPECT_EQ(*read_text_file(dir / "a/b/c.txt", kNoSizeLimit), "replaced");
   for (const auto& e : fs::recursive_directory_iterator(dir)) {
     EXPECT_FALSE(is_temporary_file(e.path())) << e.path();
   }
@@ -28,12 +28,43 @@ TEST(FileIo, AtomicWriteCreatesDirectoriesAndLeavesNoTemporaries) {
 }
 
 TEST(FileIo, ErrorsNameTheFile) {
-  auto r = read_file("/nonexistent/relief/x");
+  auto r = read_file("/nonexistent/relief/x", kNoSizeLimit);
   ASSERT_FALSE(r);
   EXPECT_NE(r.error().message.find("/nonexistent/relief/x"), std::string::npos);
   auto w = write_text_file_atomic("/proc/relief-cannot-write/x", "y");
   ASSERT_FALSE(w);
   EXPECT_NE(w.error().message.find("relief-cannot-write"), std::string::npos);
+}
+
+// Reads end: a FIFO (which would block until a writer came), a symlink to
+// /dev/zero (which never ends) and a directory are refused by their type
+// before anything is read, and a file larger than the caller's cap (here a
+// sparse one) by its size; a file within the cap reads whole.
+TEST(FileIo, ReadsAreOfRegularFilesWithinTheirCap) {
+  const fs::path dir = fs::temp_directory_path() / "relief_file_io_read";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  ASSERT_EQ(::mkfifo((dir / "fifo").c_str(), 0600), 0);
+  fs::create_symlink("/dev/zero", dir / "zero");
+  { std::ofstream sparse(dir / "sparse", std::ios::binary); }
+  fs::resize_file(dir / "sparse", uint64_t{1} << 30);
+  ASSERT_TRUE(write_text_file_atomic(dir / "small", "12345"));
+  const auto refused = [&](const std::string& name, uint64_t cap, const std::string& why) {
+    const auto r = read_file(dir / name, cap);
+    ASSERT_FALSE(r) << name;
+    EXPECT_NE(r.error().message.find((dir / name).string()), std::string::npos)
+        << r.error().message;
+    EXPECT_NE(r.error().message.find(why), std::string::npos) << r.error().message;
+  };
+  refused("fifo", kNoSizeLimit, "is a FIFO, not a regular file");
+  refused("zero", kNoSizeLimit, "is a character device, not a regular file");
+  refused(".", kNoSizeLimit, "is a directory, not a regular file");
+  refused("sparse", uint64_t{1} << 20, "the most this file can hold");
+  refused("small", 4, "5 bytes, more than 4 B");
+  EXPECT_EQ(read_text_file(dir / "small", 5).value_or(""), "12345");
+  EXPECT_TRUE(check_regular_file(dir / "small"));
+  EXPECT_FALSE(check_regular_file(dir / "fifo"));
+  fs::remove_all(dir);
 }
 
 // Renaming over a device node would replace it with a regular file (as root,
@@ -73,8 +104,8 @@ TEST(FileIo, AtomicWriteRefusesToReplaceNonRegularFiles) {
   ASSERT_TRUE(write_text_file_atomic(dir / "real.txt", "real"));
   fs::create_symlink(dir / "real.txt", dir / "real_link");
   EXPECT_TRUE(write_text_file_atomic(dir / "real_link", "new"));
-  EXPECT_EQ(*read_text_file(dir / "real.txt"), "real");
-  EXPECT_EQ(*read_text_file(dir / "real_link"), "new");
+  EXPECT_EQ(*read_text_file(dir / "real.txt", kNoSizeLimit), "real");
+  EXPECT_EQ(*read_text_file(dir / "real_link", kNoSizeLimit), "new");
   fs::remove_all(dir);
 }
 

@@ -25,7 +25,8 @@ json read_json(const fs::path& p) {
 
 // 200 x 150 samples of speckle with cross-shaped responses along the axes at
 // (50, 40) and (150, 100); 0.001 degrees per sample from (10 E, 45 N).
-std::string write_targets(const fs::path& dir) {
+// `infinities`: that many samples away from the targets are +inf.
+std::string write_targets(const fs::path& dir, int infinities = 0) {
   const int w = 200, h = 150;
   std::vector<float> v(w * h);
   std::mt19937 rng(11);
@@ -42,6 +43,7 @@ std::string write_targets(const fs::path& dir) {
       }
     }
   }
+  for (int i = 0; i < infinities; ++i) v[(10 + 7 * i) * w + 100 + i] = INFINITY;
   const std::string path = (dir / "targets.tif").string();
   const double gt[6] = {10, 0.001, 0, 45, 0, -0.001};
   write_geotiff(path, w, h, gt, v);
@@ -81,6 +83,23 @@ TEST(Detect, TargetsBecomeGeoJsonPointsWithAnAnalysis) {
   char magic[8] = {};
   png.read(magic, 8);
   EXPECT_EQ(std::string(magic + 1, 3), "PNG");
+}
+
+// An infinite sample is no amplitude: it is nodata, neither a target nor the
+// maximum the detector's levels are relative to.
+TEST(Detect, InfiniteSamplesAreNodataNotTargets) {
+  ScratchDir dir("detect_inf");
+  const std::string in = write_targets(dir.path(), 5);
+  const fs::path out = dir / "t.geojson";
+  auto r = run_relief({"detect", in, "-o", out.string(), "-q"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.out.find(" inf"), std::string::npos) << r.out;
+  const json g = read_json(out);
+  ASSERT_EQ(g["features"].size(), 2u) << g.dump();
+  for (const json& f : g["features"]) {
+    ASSERT_TRUE(f["properties"]["amplitude"].is_number()) << f.dump();
+    EXPECT_TRUE(std::isfinite(f["properties"]["amplitude"].get<double>()));
+  }
 }
 
 TEST(Detect, BadInputsAreOneLineErrorsAndWriteNothing) {

@@ -19,7 +19,7 @@ std::map<std::string, std::vector<std::byte>> tile_files(const fs::path& root) {
   std::map<std::string, std::vector<std::byte>> files;
   for (const auto& e : fs::recursive_directory_iterator(root)) {
     if (e.path().extension() == ".rtile" || e.path().extension() == ".rli") {
-      files[fs::relative(e.path(), root).generic_string()] = *read_file(e.path());
+      files[fs::relative(e.path(), root).generic_string()] = *read_file(e.path(), kNoSizeLimit);
     }
   }
   return files;
@@ -80,7 +80,7 @@ TEST(Formats, SmallBudgetBuildStaysWithinIt) {
                        "elevation", "--memory", "128MiB", "-q"},
                       "exec /usr/bin/time -f '%M' -o " + (dir / "rss").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  const std::string rss = *read_text_file(dir / "rss");
+  const std::string rss = *read_text_file(dir / "rss", kNoSizeLimit);
   const double peak_mib = std::stod(rss) / 1024.0;
   std::printf("peak RSS of a 128 MiB-budget build: %.1f MiB\n", peak_mib);
   EXPECT_LT(peak_mib, 128.0) << "the budget covers the whole process";

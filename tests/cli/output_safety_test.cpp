@@ -19,7 +19,8 @@ std::map<std::string, std::string> snapshot(const fs::path& dir) {
   std::map<std::string, std::string> files;
   for (const auto& e : fs::recursive_directory_iterator(dir)) {
     if (e.is_regular_file()) {
-      files[fs::relative(e.path(), dir).string()] = read_text_file(e.path()).value_or("?");
+      files[fs::relative(e.path(), dir).string()] =
+          read_text_file(e.path(), kNoSizeLimit).value_or("?");
     }
   }
   return files;
@@ -46,11 +47,12 @@ class OutputSafety : public ::testing::Test {
   }
   void SetUp() override {
     store_before_ = snapshot(store_);
-    raster_before_ = read_text_file(raster_).value_or("");
+    raster_before_ = read_text_file(raster_, kNoSizeLimit).value_or("");
   }
   void TearDown() override {
     EXPECT_EQ(snapshot(store_), store_before_) << "the input store changed";
-    EXPECT_EQ(read_text_file(raster_).value_or(""), raster_before_) << "the input raster changed";
+    EXPECT_EQ(read_text_file(raster_, kNoSizeLimit).value_or(""), raster_before_)
+        << "the input raster changed";
     EXPECT_TRUE(temporary_files(dir_->path()).empty());
   }
   // The path of one tile of the store.

@@ -48,7 +48,7 @@ TEST_F(RenderArgs, AStoreBuiltFromALevelDownDrawsAsTheWholePyramid) {
                            "--stats", (dir_->path() / "levels.json").string()},
                           kNoMesaLeakReport);
       ASSERT_EQ(r.exit_code, 0) << r.err;
-      auto bytes = read_file(out);
+      auto bytes = read_file(out, kNoSizeLimit);
       ASSERT_TRUE(bytes) << bytes.error().message;
       images.push_back(std::move(*bytes));
     }
@@ -120,7 +120,7 @@ TEST_F(RenderArgs, RefineThreadsAndTheGlCriteriaDrawTheSameImage) {
     args.insert(args.end(), runs[i].begin(), runs[i].end());
     auto r = run_relief(args, kNoMesaLeakReport);
     ASSERT_EQ(r.exit_code, 0) << r.err;
-    auto bytes = read_file(out);
+    auto bytes = read_file(out, kNoSizeLimit);
     ASSERT_TRUE(bytes) << bytes.error().message;
     images.push_back(std::move(*bytes));
   }
@@ -140,7 +140,7 @@ TEST_F(RenderArgs, ErrorSamplesSetTheStillsMeasurement) {
     if (*n) args.insert(args.end(), {"--error-samples", n});
     auto r = run_relief(args, kNoMesaLeakReport);
     ASSERT_EQ(r.exit_code, 0) << r.err;
-    auto text = read_file(stats);
+    auto text = read_file(stats, kNoSizeLimit);
     ASSERT_TRUE(text) << text.error().message;
     const auto json = nlohmann::json::parse(
         std::string(reinterpret_cast<const char*>(text->data()), text->size()));

@@ -45,7 +45,7 @@ std::map<std::string, std::vector<std::byte>> store_files(const fs::path& root) 
   std::map<std::string, std::vector<std::byte>> files;
   for (const auto& e : fs::recursive_directory_iterator(root)) {
     if (!e.is_regular_file()) continue;
-    files[fs::relative(e.path(), root).generic_string()] = *read_file(e.path());
+    files[fs::relative(e.path(), root).generic_string()] = *read_file(e.path(), kNoSizeLimit);
   }
   return files;
 }
@@ -192,7 +192,7 @@ TEST(Resume, KilledAfterTheScratchIsRemovedResumesToTheSameStore) {
   const int pid = spawn_relief(build_args(out.string()));
   ASSERT_GT(pid, 0);
   ASSERT_TRUE(kill_when(pid, [&] { return fs::exists(out / ".build/state.json"); }));
-  const std::string state = *read_text_file(out / ".build/state.json");
+  const std::string state = *read_text_file(out / ".build/state.json", kNoSizeLimit);
   ASSERT_EQ(run_relief(build_args(out.string())).exit_code, 0);
   const auto expected = store_files(out);
   // The kill point: every tile and level index written, the scratch gone.

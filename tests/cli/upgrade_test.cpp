@@ -27,7 +27,7 @@ int line_count(const std::string& s) {
 }
 
 std::vector<std::byte> bytes_of(const fs::path& p) {
-  auto b = read_file(p);
+  auto b = read_file(p, kNoSizeLimit);
   EXPECT_TRUE(b) << p;
   return b ? *b : std::vector<std::byte>{};
 }
@@ -62,7 +62,7 @@ class Upgrade : public SmallStoreSuite {
       if (entry.path().filename() != tiles::kLevelIndexName) continue;
       EXPECT_TRUE(write_file_atomic(entry.path(), as_version1(bytes_of(entry.path()))));
     }
-    auto text = read_text_file(old / tiles::kManifestName);
+    auto text = read_text_file(old / tiles::kManifestName, kNoSizeLimit);
     auto j = nlohmann::json::parse(*text);
     j["format_version"] = 1;
     EXPECT_TRUE(write_text_file_atomic(old / tiles::kManifestName, j.dump(2) + "\n"));
@@ -119,6 +119,20 @@ TEST_F(Upgrade, GivesWhatAFreshBuildWrites) {
   r = run_relief({"upgrade", old.string(), "-q"});
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("already at store format version 2"), std::string::npos) << r.out;
+}
+
+// A current manifest over version-1 indices (an upgrade killed before its
+// manifest): readers send the user to upgrade, and upgrade does not answer
+// "nothing to do".
+TEST_F(Upgrade, OldIndicesUnderACurrentManifestAreUpgradedToo) {
+  const fs::path old = format_one_copy("half");
+  fs::copy_file(store() / tiles::kManifestName, old / tiles::kManifestName,
+                fs::copy_options::overwrite_existing);
+  EXPECT_NE(run_relief({"info", old.string()}).err.find("relief upgrade"), std::string::npos);
+  auto r = run_relief({"upgrade", old.string(), "-q"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("upgraded from store format version 1 to 2"), std::string::npos) << r.out;
+  EXPECT_EQ(metadata(old), metadata(store()));
 }
 
 // Imagery has no heights: errors 0, only the format changes.

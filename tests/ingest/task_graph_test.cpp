@@ -89,14 +89,14 @@ TEST(Writeback, StartsFilesAndIgnoresMissingOnes) {
     writeback.start(dir / "tile");
     writeback.start(dir / "missing");
   }
-  EXPECT_EQ(*read_text_file(dir / "tile"), text);
+  EXPECT_EQ(*read_text_file(dir / "tile", kNoSizeLimit), text);
 }
 
 std::map<std::string, std::vector<std::byte>> files_under(const fs::path& root) {
   std::map<std::string, std::vector<std::byte>> files;
   for (const auto& e : fs::recursive_directory_iterator(root)) {
     if (e.is_regular_file())
-      files[fs::relative(e.path(), root).generic_string()] = *read_file(e.path());
+      files[fs::relative(e.path(), root).generic_string()] = *read_file(e.path(), kNoSizeLimit);
   }
   return files;
 }

@@ -90,7 +90,7 @@ const std::string kMissing =
 class HttpSourceTest : public SmallStoreSuite {
  protected:
   static std::string file(const std::string& relative) {
-    auto b = read_file(store() / relative);
+    auto b = read_file(store() / relative, kNoSizeLimit);
     return std::string(reinterpret_cast<const char*>(b->data()), b->size());
   }
   static std::string a_tile() {

@@ -64,7 +64,7 @@ class SharesTest : public SmallStoreSuite {
                                     "--size", "160x120", "-o", png.string()},
                                    kNoMesaLeakReport);
     EXPECT_EQ(r.exit_code, 0) << r.err;
-    auto bytes = read_file(png);
+    auto bytes = read_file(png, kNoSizeLimit);
     EXPECT_TRUE(bytes) << png;
     if (!bytes) return {};
     return {reinterpret_cast<const uint8_t*>(bytes->data()),

@@ -80,7 +80,7 @@ class HostileServer {
     return ::send(c, s.data(), s.size(), MSG_NOSIGNAL) == static_cast<ssize_t>(s.size());
   }
   uint64_t serve_file(int c, const std::string& path) {
-    auto bytes = read_file(root_ / path);
+    auto bytes = read_file(root_ / path, kNoSizeLimit);
     if (!bytes) {
       send_all(c, "HTTP/1.1 404 Not Found\r\nContent-Length: 0\r\nConnection: close\r\n\r\n");
       return 0;

@@ -144,7 +144,7 @@ TEST_P(EveryCompositor, MatchesTheSingleProcessImageOn2To4Ranks) {
     ASSERT_EQ(r.exit_code, 0) << r.err;
     const std::string what = fmt::format("{} on {} ranks", how, ranks);
     EXPECT_EQ(differing_pixels(read_png(out, kWidth, kHeight), single()), 0u) << what;
-    const auto s = nlohmann::json::parse(*read_text_file(stats));
+    const auto s = nlohmann::json::parse(*read_text_file(stats, kNoSizeLimit));
     EXPECT_EQ(s["compositing"], how == "radix-k" ? "radix-k:8" : how) << what;
     int product = 1;
     for (const auto& k : s["composite_rounds"]) product *= k.get<int>();
@@ -196,7 +196,7 @@ TEST(Parallel, APathEqualsTheSingleProcessFrames) {
         << name;
   }
   EXPECT_FALSE(fs::exists(dir / "many" / "frame_00004.png"));
-  const auto stats = nlohmann::json::parse(*read_text_file(dir / "stats.json"));
+  const auto stats = nlohmann::json::parse(*read_text_file(dir / "stats.json", kNoSizeLimit));
   ASSERT_EQ(stats["frames"].size(), 4u);
   EXPECT_EQ(stats["frames"][3]["ranks"].size(), 2u);
 }
@@ -206,7 +206,7 @@ nlohmann::json stats_of(int ranks, const std::string& mode, ScratchDir& dir,
   const fs::path stats = dir / (mode.substr(10) + lod + ".json");
   auto r = parallel_render(ranks, mode, dir / "out.png", {"--stats", stats.string(), "--lod", lod});
   EXPECT_EQ(r.exit_code, 0) << r.err;
-  return nlohmann::json::parse(*read_text_file(stats));
+  return nlohmann::json::parse(*read_text_file(stats, kNoSizeLimit));
 }
 
 // With --lod quads every quad has about the same triangles, the seed's

@@ -173,16 +173,19 @@ TEST_F(HostileClientsTest, KeepAliveClientsBeyondTheThreadCountAreAllServed) {
   EXPECT_EQ(good.load(), kClients * kRequests);
 }
 
+// Busy connections (an answer in progress: a large file the client does not
+// read) hold their slots: one more client is refused at once.
 TEST_F(HostileClientsTest, ConnectionsBeyondTheLimitAreRefusedAtOnce) {
   serve::ServeOptions o;
   o.max_connections = 8;
   auto server = start(o);
   std::vector<int> held;
-  const std::string req = get_request("/manifest.json");
+  const std::string req = get_request(big_path_);
   for (int i = 0; i < 8; ++i) {
     held.push_back(connect_client(server->port()));
     ::send(held.back(), req.data(), req.size(), MSG_NOSIGNAL);
-    ASSERT_EQ(read_response(held.back()).status, 200);
+    char first = 0;  // the answer has begun: the server is writing it
+    ASSERT_EQ(::recv(held.back(), &first, 1, 0), 1);
   }
   const int extra = connect_client(server->port());
   EXPECT_EQ(read_response(extra).status, 503);
@@ -198,6 +201,34 @@ TEST_F(HostileClientsTest, ConnectionsBeyondTheLimitAreRefusedAtOnce) {
   }
   EXPECT_EQ(status, 200);
   for (int fd : held) ::close(fd);
+}
+
+// Idle connections (keep-alive after an answer, or opened and silent) make
+// room for a newcomer, the longest idle first: a client holding the whole
+// limit open does not lock others out until the read deadline.
+TEST_F(HostileClientsTest, IdleConnectionsMakeRoomForNewClients) {
+  serve::ServeOptions o;
+  o.max_connections = 8;
+  auto server = start(o);
+  std::vector<int> idle;
+  const std::string req = get_request("/manifest.json");
+  for (int i = 0; i < 4; ++i) {  // answered, then kept alive
+    idle.push_back(connect_client(server->port()));
+    ::send(idle.back(), req.data(), req.size(), MSG_NOSIGNAL);
+    ASSERT_EQ(read_response(idle.back()).status, 200);
+  }
+  for (int i = 0; i < 4; ++i) idle.push_back(connect_client(server->port()));  // silent
+  for (int round = 0; round < 20; ++round) {
+    EXPECT_EQ(get(server->port(), "/manifest.json").status, 200) << "round " << round;
+  }
+  // Idle ones were closed for them (before the first newcomer was answered).
+  int closed = 0;
+  for (int fd : idle) {
+    char byte = 0;
+    closed += ::recv(fd, &byte, 1, MSG_DONTWAIT) == 0;
+    ::close(fd);
+  }
+  EXPECT_GE(closed, 1);
 }
 
 // The `relief serve` process: a FIFO at a tile path is not a file to serve (it

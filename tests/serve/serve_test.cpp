@@ -31,7 +31,7 @@ namespace {
 namespace fs = std::filesystem;
 
 std::string file_text(const fs::path& p) {
-  auto bytes = read_file(p);
+  auto bytes = read_file(p, kNoSizeLimit);
   return std::string(reinterpret_cast<const char*>(bytes->data()), bytes->size());
 }
 

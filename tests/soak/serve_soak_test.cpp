@@ -52,7 +52,7 @@ TEST_F(ServeSoak, ManyClientsManyRoundsEveryByteRightAndMemoryFlat) {
   std::map<std::string, std::string> files;  // URL path -> contents
   for (const auto& e : fs::recursive_directory_iterator(store())) {
     if (!e.is_regular_file()) continue;
-    const auto bytes = read_file(e.path());
+    const auto bytes = read_file(e.path(), kNoSizeLimit);
     ASSERT_TRUE(bytes);
     // A path, not `"/" + string&&`: gcc 12 -O3 reports a false -Wrestrict there.
     files[(fs::path("/") / fs::relative(e.path(), store())).string()] =

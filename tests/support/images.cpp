@@ -9,7 +9,7 @@ namespace relief::testing {
 
 Image read_png(const std::filesystem::path& path, int width, int height) {
   const Image black{width, height, std::vector<uint8_t>(static_cast<size_t>(width) * height * 4)};
-  auto bytes = read_file(path);
+  auto bytes = read_file(path, kNoSizeLimit);
   if (!bytes) {
     ADD_FAILURE() << path << ": " << bytes.error().message;
     return black;

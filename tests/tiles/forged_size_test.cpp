@@ -210,7 +210,7 @@ TEST(ForgedTile, HugeOrSpecialTileFilesAreNotRead) {
   auto huge_file = store->read_tile(key);
   ASSERT_FALSE(huge_file);
   EXPECT_EQ(huge_file.error().message,
-            fmt::format("{}: 1073741824 bytes, larger than {}, the most this file can be",
+            fmt::format("{}: 1073741824 bytes, more than {}, the most this file can hold",
                         path.string(), format_bytes(cap)));
   EXPECT_LT(resident_set_bytes(), rss_before + 64 * kMiB);
 
@@ -218,7 +218,7 @@ TEST(ForgedTile, HugeOrSpecialTileFilesAreNotRead) {
   ASSERT_EQ(::mkfifo(path.c_str(), 0600), 0);
   auto fifo = store->read_tile(key);
   ASSERT_FALSE(fifo);
-  EXPECT_EQ(fifo.error().message, path.string() + ": not a regular file");
+  EXPECT_EQ(fifo.error().message, path.string() + ": is a FIFO, not a regular file");
   fs::remove_all(root);
 }
 

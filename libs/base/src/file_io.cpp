@@ -6,42 +6,18 @@
 #include <unistd.h>
 
 #include <fmt/format.h>
+
 #include <algorithm>
 #include <atomic>
 #include <cerrno>
 #include <cstring>
+#include "relief/base/units.h"
 
 namespace relief {
 namespace fs = std::filesystem;
 
 std::string errno_text(int err) {
   return std::strerror(err);
-}
-
-Result<std::vector<std::byte>> read_file(const fs::path& path) {
-  int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) return fail(fmt::format("{}: cannot open: {}", path.string(), errno_text(errno)));
-  std::vector<std::byte> bytes;
-  std::byte chunk[1 << 16];
-  for (;;) {
-    ssize_t n = ::read(fd, chunk, sizeof chunk);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      int err = errno;
-      ::close(fd);
-      return fail(fmt::format("{}: read failed: {}", path.string(), errno_text(err)));
-    }
-    if (n == 0) break;
-    bytes.insert(bytes.end(), chunk, chunk + n);
-  }
-  ::close(fd);
-  return bytes;
-}
-
-Result<std::string> read_text_file(const fs::path& path) {
-  auto bytes = read_file(path);
-  if (!bytes) return std::unexpected(bytes.error());
-  return std::string(reinterpret_cast<const char*>(bytes->data()), bytes->size());
 }
 
 bool is_temporary_file(const fs::path& path) {
@@ -60,6 +36,56 @@ const char* file_type_name(mode_t mode) {
 }
 
 }  // namespace
+
+Result<std::vector<std::byte>> read_file(const fs::path& path, uint64_t max_bytes) {
+  // O_NONBLOCK: opening a FIFO without a writer returns at once (it is then
+  // refused by its type) instead of waiting for one.
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
+  if (fd < 0) return fail(fmt::format("{}: cannot open: {}", path.string(), errno_text(errno)));
+  struct stat st {};
+  std::string error;
+  if (::fstat(fd, &st) != 0) {
+    error = fmt::format("{}: cannot stat: {}", path.string(), errno_text(errno));
+  } else if (!S_ISREG(st.st_mode)) {
+    error = fmt::format("{}: is {}, not a regular file", path.string(), file_type_name(st.st_mode));
+  } else if (static_cast<uint64_t>(st.st_size) > max_bytes) {
+    error = fmt::format("{}: {} bytes, more than {}, the most this file can hold", path.string(),
+                        st.st_size, format_bytes(max_bytes));
+  }
+  std::vector<std::byte> bytes;
+  if (error.empty()) bytes.reserve(static_cast<size_t>(st.st_size));
+  while (error.empty()) {
+    std::byte chunk[1 << 16];
+    const ssize_t n = ::read(fd, chunk, sizeof chunk);
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) error = fmt::format("{}: read failed: {}", path.string(), errno_text(errno));
+    if (n <= 0) break;
+    if (bytes.size() + static_cast<size_t>(n) > max_bytes) {  // it grew while being read
+      error = fmt::format("{}: more than {}, the most this file can hold", path.string(),
+                          format_bytes(max_bytes));
+    }
+    bytes.insert(bytes.end(), chunk, chunk + n);
+  }
+  ::close(fd);
+  if (!error.empty()) return fail(error);
+  return bytes;
+}
+
+Result<std::string> read_text_file(const fs::path& path, uint64_t max_bytes) {
+  auto bytes = read_file(path, max_bytes);
+  if (!bytes) return std::unexpected(bytes.error());
+  return std::string(reinterpret_cast<const char*>(bytes->data()), bytes->size());
+}
+
+Status check_regular_file(const fs::path& path) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) {
+    return fail(fmt::format("{}: cannot open: {}", path.string(), errno_text(errno)));
+  }
+  if (S_ISREG(st.st_mode)) return {};
+  return fail(
+      fmt::format("{}: is {}, not a regular file", path.string(), file_type_name(st.st_mode)));
+}
 
 Status check_replaceable(const fs::path& path) {
   struct stat st {};

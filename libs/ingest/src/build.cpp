@@ -23,9 +23,11 @@
 #include "pyramid.h"
 #include "relief/base/file_io.h"
 #include "relief/base/first_error.h"
+#include "relief/base/units.h"
 #include "relief/tiles/geometric_error.h"
 #include "relief/tiles/store.h"
 #include "relief/tiles/store_layout.h"
+#include "relief/tiles/store_source.h"
 #include "source.h"
 #include "task_graph.h"
 #include "void_fill.h"
@@ -183,7 +185,7 @@ Result<OutputState> prepare_output(const BuildOptions& o, const std::string& pri
   if (exists && is_store_like(out)) {
     const fs::path state = out / kBuildDir / kStateName;
     const bool complete = fs::exists(out / tiles::kManifestName, ec);
-    const auto text = read_text_file(state);
+    const auto text = read_text_file(state, kMaxStateBytes);
     const bool same = text && *text == print;
     if (!o.overwrite) {
       // The manifest is written last, after every tile and index is durable:
@@ -299,6 +301,44 @@ Result<MemoryPlan> plan_memory(uint64_t budget, unsigned workers) {
   return MemoryPlan{caches / 3, caches - caches / 3};
 }
 
+// The tiles of `level` whose area meets `box` (columns may run past the
+// antimeridian; the caller wraps them).
+struct TileRange {
+  int64_t x0, x1, y0, y1;
+  uint64_t count() const { return static_cast<uint64_t>((x1 - x0 + 1) * (y1 - y0 + 1)); }
+};
+TileRange tiles_covering(const geo::GeoBox& box, int level) {
+  const double n = TileKey::tiles_per_side(level);
+  const auto col = [&](double lon) {
+    return static_cast<int64_t>(std::floor((lon + 180.0) / 360.0 * n));
+  };
+  const auto row = [&](double lat) {
+    return std::clamp<int64_t>(static_cast<int64_t>(std::floor((90.0 - lat) / 180.0 * n)), 0,
+                               static_cast<int64_t>(n) - 1);
+  };
+  return {col(box.west), col(box.east), row(box.north), row(box.south)};
+}
+
+// What the build's plan (its task graph, the keys of every level, the
+// indices) takes per finest tile, measured on a level-15 build of one SRTM
+// tile; the coarser levels add a third.
+constexpr uint64_t kPlanBytesPerTile = 1024;
+
+// A build whose plan alone would not fit in a quarter of the memory budget is
+// refused before anything is written: a sparse 1e6 x 1e6 input or a
+// --max-level far past the data's own would otherwise grow without bound
+// before its first tile.
+Status check_plan_fits(const std::vector<Source>& sources, int max_level, uint64_t budget) {
+  uint64_t tiles = 0;
+  for (const Source& s : sources) tiles += tiles_covering(s.box, max_level).count();
+  const uint64_t plan = (tiles + tiles / 3) * kPlanBytesPerTile;
+  if (plan <= budget / 4) return {};
+  return fail(fmt::format(
+      "level {}: the inputs cover {} tiles, whose plan alone takes about {} of the --memory budget "
+      "{}; give a lower --max-level, more --memory, or split the inputs",
+      max_level, tiles, format_bytes(plan), format_bytes(budget)));
+}
+
 struct LevelResult {
   tiles::LevelIndex index;
   // Interior statistics of every tile, from the headers just written or found.
@@ -403,19 +443,12 @@ class Builder {
 
   std::vector<TileKey> finest_tiles() const {
     std::set<TileKey> keys;
-    const double n = TileKey::tiles_per_side(max_level_);
+    const auto n = static_cast<int64_t>(TileKey::tiles_per_side(max_level_));
     for (const auto& s : sources_) {
-      const auto col = [&](double lon) {
-        return static_cast<int64_t>(std::floor((lon + 180.0) / 360.0 * n));
-      };
-      const auto row = [&](double lat) {
-        return std::clamp<int64_t>(static_cast<int64_t>(std::floor((90.0 - lat) / 180.0 * n)), 0,
-                                   static_cast<int64_t>(n) - 1);
-      };
-      for (int64_t y = row(s.box.north); y <= row(s.box.south); ++y) {
-        for (int64_t x = col(s.box.west); x <= col(s.box.east); ++x) {
-          const int64_t wrapped =
-              ((x % static_cast<int64_t>(n)) + static_cast<int64_t>(n)) % static_cast<int64_t>(n);
+      const TileRange r = tiles_covering(s.box, max_level_);
+      for (int64_t y = r.y0; y <= r.y1; ++y) {
+        for (int64_t x = r.x0; x <= r.x1; ++x) {
+          const int64_t wrapped = ((x % n) + n) % n;
           keys.insert({max_level_, static_cast<uint32_t>(wrapped), static_cast<uint32_t>(y)});
         }
       }
@@ -615,7 +648,9 @@ class Builder {
     const fs::path path = o_.output / tiles::tile_relative_path(key);
     std::error_code ec;
     if (fs::exists(path, ec)) {
-      auto bytes = read_file(path);
+      // Any size a tile may have: a larger one is rewritten below.
+      auto bytes =
+          read_file(path, tiles::max_file_bytes(tiles::tile_relative_path(key), std::nullopt));
       if (bytes) {
         if (auto h = tiles::parse_tile_header(*bytes, path.string())) {
           return WrittenTile{tiles::index_entry_for(key, *h, bytes->size()), h->stats, true};
@@ -712,6 +747,7 @@ Result<BuildReport> build_store(const BuildOptions& o, Executor& executor, Progr
   if (min_level < 0 || min_level > max_level) {
     return fail(fmt::format("--min-level: {} is not in 0..{}", min_level, max_level));
   }
+  RELIEF_CHECK(check_plan_fits(sources, max_level, o.memory_budget));
   const std::string print = fingerprint(o, codec, min_level, max_level);
   const OutputState state = RELIEF_TRY(prepare_output(o, print));
   if (state == OutputState::Finished) return finish_cleanup(o.output);

@@ -91,7 +91,7 @@ Result<std::shared_ptr<const tiles::Raster>> CoreStore::read(const geo::TileKey&
   const fs::path path = path_of(key);
   std::error_code ec;
   if (!fs::exists(path, ec)) return std::shared_ptr<const tiles::Raster>();
-  auto bytes = read_file(path);
+  auto bytes = read_file(path, tiles::max_tile_file_bytes(shape_));
   if (!bytes) return std::unexpected(bytes.error());
   auto tile = tiles::decode_tile(*bytes, path.string(), shape_);
   if (!tile) return std::unexpected(tile.error());

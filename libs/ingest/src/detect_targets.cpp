@@ -2,7 +2,9 @@
 
 #include <gdal_alg.h>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <mutex>
 
 #include <fmt/format.h>
@@ -100,6 +102,22 @@ Status write_text(const std::filesystem::path& path, const std::string& text) {
   return write_file_atomic(path, std::as_bytes(std::span(text.data(), text.size())));
 }
 
+// The largest finite sample of the band, read a strip at a time.
+Result<double> finite_maximum(GDALRasterBandH band, int width, int height, int strip,
+                              const std::string& name) {
+  double most = -std::numeric_limits<double>::infinity();
+  std::vector<float> buffer;
+  for (int y0 = 0; y0 < height; y0 += strip) {
+    if (auto e = read_padded(band, 0, y0, width, std::min(strip, height - y0), 0, buffer, name)) {
+      return fail(*e);
+    }
+    for (float v : buffer) {
+      if (!std::isnan(v)) most = std::max(most, static_cast<double>(v));
+    }
+  }
+  return most;
+}
+
 }  // namespace
 
 Result<DetectReport> detect_targets(const DetectOptions& o, Executor& executor,
@@ -113,6 +131,10 @@ Result<DetectReport> detect_targets(const DetectOptions& o, Executor& executor,
   }
   const int width = GDALGetRasterXSize(in.get()), height = GDALGetRasterYSize(in.get());
   constexpr int kStrip = 256;
+  // GDAL's statistics count infinite samples, which are nodata here.
+  if (!std::isfinite(hi)) hi = RELIEF_TRY(finite_maximum(band, width, height, kStrip, o.input));
+  if (!(hi > 0))
+    return fail(fmt::format("{}: no positive amplitudes (nodata everywhere?)", o.input));
   const int strips = (height + kStrip - 1) / kStrip;
   std::vector<std::vector<process::Detection>> per_strip(static_cast<size_t>(strips));
   std::mutex gdal_mutex;  // one dataset handle: reads are serialised

@@ -1,12 +1,14 @@
 #include "gdal_env.h"
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <limits>
 
 #include <cpl_conv.h>
 #include <cpl_error.h>
 
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -39,9 +41,42 @@ std::string gdal_error(const std::string& fallback) {
   return text;
 }
 
+namespace {
+
+// What GDAL would read for `path`, as a file of this file system: the path
+// itself, or for a /vsizip/-style path the nearest part of it that exists
+// ("/vsizip/a/b.zip/c.hgt": a/b.zip).
+std::optional<std::filesystem::path> local_file_of(const std::string& path) {
+  std::filesystem::path p = path;
+  if (path.starts_with("/vsi")) {
+    const size_t slash = path.find('/', 1);
+    if (slash == std::string::npos) return std::nullopt;
+    p = path.substr(slash + 1);
+  }
+  for (; !p.empty() && p != p.root_path(); p = p.parent_path()) {
+    struct stat st {};
+    if (::stat(p.c_str(), &st) == 0) return p;
+  }
+  return std::nullopt;
+}
+
+}  // namespace
+
 Dataset open_raster(const std::string& path) {
   init_gdal();
   CPLErrorReset();
+  // GDAL would wait on a FIFO for a writer forever and read a device without
+  // end: only regular files (and directories, which some formats are) open.
+  if (const auto file = local_file_of(path)) {
+    struct stat st {};
+    if (::stat(file->c_str(), &st) == 0 && !S_ISREG(st.st_mode) && !S_ISDIR(st.st_mode)) {
+      // Callers put `path` before the message: name the file only if it is another.
+      std::string message = check_regular_file(*file).error().message;
+      if (file->string() == path) message.erase(0, path.size() + 2);
+      CPLError(CE_Failure, CPLE_OpenFailed, "%s", message.c_str());
+      return nullptr;
+    }
+  }
   return Dataset(GDALOpenEx(path.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY | GDAL_OF_VERBOSE_ERROR,
                             nullptr, nullptr, nullptr));
 }
@@ -100,13 +135,14 @@ std::optional<std::string> read_padded(GDALRasterBandH band, int x0, int y0, int
                    GDT_Float32, 0, static_cast<GSpacing>(padded_w) * 4) != CE_None) {
     return name + ": read failed: " + gdal_error("GDAL");
   }
+  // A sample that is not finite (an infinite amplitude or height) is no
+  // measurement: nodata, as the band's own nodata value is.
   int has_nodata = 0;
   const double nodata = GDALGetRasterNoDataValue(band, &has_nodata);
-  if (has_nodata) {
-    const float nd = static_cast<float>(nodata);
-    for (float& v : out) {
-      if (v == nd) v = std::numeric_limits<float>::quiet_NaN();
-    }
+  const float nd =
+      has_nodata ? static_cast<float>(nodata) : std::numeric_limits<float>::quiet_NaN();
+  for (float& v : out) {
+    if (v == nd || std::isinf(v)) v = std::numeric_limits<float>::quiet_NaN();
   }
   return std::nullopt;
 }

@@ -8,6 +8,7 @@
 #include "relief/base/file_io.h"
 #include "relief/tiles/manifest.h"
 #include "relief/tiles/store_layout.h"
+#include "relief/tiles/store_source.h"
 
 namespace relief::ingest {
 namespace fs = std::filesystem;
@@ -75,7 +76,7 @@ Status check_identity(const fs::path& dir) {
   std::error_code ec;
   const fs::path manifest = dir / tiles::kManifestName;
   if (fs::exists(manifest, ec)) {
-    auto text = read_text_file(manifest);
+    auto text = read_text_file(manifest, tiles::kMaxManifestBytes);
     if (!text) return fail(text.error().message);
     if (auto m = tiles::Manifest::from_json(*text, manifest.string()); !m) {
       return fail(m.error().message);
@@ -84,7 +85,7 @@ Status check_identity(const fs::path& dir) {
   }
   // An interrupted build: its state file is the build's fingerprint.
   const fs::path state = dir / kBuildDir / kStateName;
-  auto text = read_text_file(state);
+  auto text = read_text_file(state, kMaxStateBytes);
   if (!text) return fail(fmt::format("{}: has no {}", dir.string(), tiles::kManifestName));
   const auto j = nlohmann::json::parse(*text, nullptr, false);
   if (j.is_discarded() || !j.is_object() || !j.contains("inputs") || !j.contains("kind")) {

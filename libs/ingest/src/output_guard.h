@@ -3,6 +3,7 @@
 // directory, so it must be provably a relief store (or a relief build's
 // scratch) and hold nothing else; and no output may hold, be, or lie inside
 // one of the build's inputs.
+#include <cstdint>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -14,6 +15,8 @@ namespace relief::ingest {
 // The build's scratch directory inside a store.
 inline constexpr const char* kBuildDir = ".build";
 inline constexpr const char* kStateName = "state.json";
+// A state file holds the build's inputs and settings: a few KiB.
+inline constexpr uint64_t kMaxStateBytes = uint64_t{16} << 20;
 
 // Fails, naming the input, when `output` is an input, holds one or lies inside one.
 Status check_output_apart_from_inputs(const std::filesystem::path& output,

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <deque>
 #include <mutex>
+#include <numbers>
 #include <optional>
 
 #include <fmt/format.h>
@@ -24,8 +25,6 @@ class NoTiles final : public TileProvider {
   bool blocking() const override { return true; }
   Result<TilePtr> get(const geo::TileKey&) override { return TilePtr{}; }
 };
-
-constexpr double kPi = 3.14159265358979323846;
 
 HeightRange unite(HeightRange a, HeightRange b) {
   return {std::min(a.lo, b.lo), std::max(a.hi, b.hi)};
@@ -305,7 +304,7 @@ double TerrainModel::subtree_error(const geo::TileKey& key) {
 
 Result<double> TerrainModel::mesh_error(const geo::TileKey& key) {
   // Flat triangles under the curved ellipsoid: the sagitta of one square.
-  const double square = 2 * kPi / std::ldexp(1.0, key.level) / mesh_.squares_x();
+  const double square = 2 * std::numbers::pi / std::ldexp(1.0, key.level) / mesh_.squares_x();
   double error = geo::wgs84::kSemiMajorAxis * square * square / 8;
   if (!data_resident(key)) {
     // Only the loading of data ahead of the view asks without the tile: an

@@ -13,6 +13,7 @@
 
 #include "relief/base/file_io.h"
 #include "relief/tiles/store_layout.h"
+#include "relief/tiles/store_source.h"
 
 namespace relief::net {
 namespace {
@@ -48,7 +49,7 @@ std::optional<std::pair<fs::path, std::vector<std::byte>>> newest_cached_manifes
       ec.clear();
       continue;
     }
-    auto bytes = read_file(file);
+    auto bytes = read_file(file, tiles::kMaxManifestBytes);
     if (!bytes || !tiles::StoreSource::verify(tiles::kManifestName, *bytes)) continue;
     newest.emplace(it->path(), std::move(*bytes));
     newest_time = time;
@@ -118,7 +119,7 @@ class Cache final : public DiskCache {
     if (auto it = entries_.find(key); it != entries_.end()) {
       order_.splice(order_.begin(), order_, it->second.position);
       lock.unlock();
-      auto bytes = read_file(dir_ / key);
+      auto bytes = read_file(dir_ / key, tiles::max_file_bytes(rel, std::nullopt));
       if (bytes && tiles::StoreSource::verify(rel, *bytes)) {
         std::lock_guard relock(mutex_);
         ++hits_;

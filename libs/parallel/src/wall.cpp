@@ -6,6 +6,10 @@
 #include "relief/base/file_io.h"
 
 namespace relief::parallel {
+namespace {
+// A wall file describes a grid of displays in a few hundred bytes.
+constexpr uint64_t kMaxWallFileBytes = uint64_t{1} << 20;
+}  // namespace
 
 lod::PixelRect Wall::display(int index) const {
   const int r = index / columns, c = index % columns;
@@ -75,7 +79,7 @@ Result<Wall> parse_wall(const std::string& text, const std::string& where) {
 }
 
 Result<Wall> read_wall(const std::string& path) {
-  const std::string text = RELIEF_TRY(read_text_file(path));
+  const std::string text = RELIEF_TRY(read_text_file(path, kMaxWallFileBytes));
   return parse_wall(text, path);
 }
 

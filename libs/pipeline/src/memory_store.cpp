@@ -22,6 +22,7 @@ class MemorySource final : public tiles::StoreSource {
         indices_(std::move(indices)) {}
 
   std::string name() const override { return name_; }
+  bool holds_files() const override { return false; }
 
   Result<std::vector<std::byte>> fetch(const std::string& relative) const override {
     if (relative == tiles::kManifestName) {

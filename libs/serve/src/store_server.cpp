@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cstring>
+#include <mutex>
 #include <thread>
 #include <unordered_map>
 #include <vector>
@@ -49,6 +50,15 @@ struct Connection {
 
 enum class Progress { blocked, done, closed };
 
+// Over the limit with no idle connection to close: say so at once (best
+// effort, never waiting) rather than queueing.
+void refuse_busy(int fd) {
+  const Answer busy = status_answer(503, false);
+  [[maybe_unused]] const ssize_t sent =
+      ::send(fd, busy.head.data(), busy.head.size(), MSG_NOSIGNAL | MSG_DONTWAIT);
+  ::close(fd);
+}
+
 class Server;
 
 // An epoll loop on its own thread: accepts from the shared listener (woken
@@ -64,6 +74,16 @@ class Loop {
     [[maybe_unused]] const ssize_t n = ::write(wake_fd_, &one, sizeof one);
   }
 
+  // Takes a connection accepted by another loop that had no idle one to close.
+  void hand_over(int fd) {
+    {
+      std::lock_guard lock(handed_mutex_);
+      handed_.push_back(fd);
+    }
+    wake();
+  }
+  size_t size() const { return size_.load(std::memory_order_relaxed); }
+
  private:
   void accept_some(Clock::time_point now);
   void on_event(Connection& c, uint32_t events, Clock::time_point now);
@@ -76,10 +96,18 @@ class Loop {
   void watch(Connection& c, uint32_t events, int op = EPOLL_CTL_MOD);
   void close_connection(Connection& c);
   void sweep(Clock::time_point now);
+  void adopt(int fd, Clock::time_point now);
+  // Over the connection limit: closes this loop's longest-idle connection (no
+  // answer in progress, no request begun); false if it has none.
+  bool evict_idle();
+  void take_handed(Clock::time_point now);
 
   Server& server_;
   int epoll_fd_ = -1, wake_fd_ = -1;
   std::unordered_map<int, Connection> connections_;
+  std::atomic<size_t> size_{0};  // connections_.size(), for other loops to read
+  std::mutex handed_mutex_;
+  std::vector<int> handed_;
 };
 
 class Server final : public StoreServer {
@@ -109,6 +137,16 @@ class Server final : public StoreServer {
     ::close(listener_);
   }
 
+  // The loop with the most connections other than `self` (the likeliest to
+  // have an idle one), or nullptr.
+  Loop* fullest_other(const Loop* self) const {
+    Loop* fullest = nullptr;
+    for (const auto& loop : loops_) {
+      if (loop.get() != self && (!fullest || loop->size() > fullest->size())) fullest = loop.get();
+    }
+    return fullest;
+  }
+
   ServeOptions options_;
   int listener_, port_;
   std::atomic<bool> stopping_{false};
@@ -132,6 +170,7 @@ Loop::Loop(Server& server) : server_(server) {
 }
 
 Loop::~Loop() {
+  for (int fd : handed_) ::close(fd);  // handed over while the server stopped
   ::close(epoll_fd_);
   ::close(wake_fd_);
 }
@@ -146,7 +185,12 @@ void Loop::run() {
     const auto now = server_.options_.clock();
     for (int i = 0; i < n; ++i) {
       const int fd = events[i].data.fd;
-      if (fd == wake_fd_) continue;  // stop() woke us: the loop condition decides
+      if (fd == wake_fd_) {  // stop() or another loop's hand-over woke us
+        uint64_t count = 0;
+        [[maybe_unused]] const ssize_t r = ::read(wake_fd_, &count, sizeof count);
+        take_handed(now);
+        continue;
+      }
       if (fd == server_.listener_) {
         accept_some(now);
         continue;
@@ -167,21 +211,57 @@ void Loop::accept_some(Clock::time_point now) {
   for (int i = 0; i < 64; ++i) {
     const int fd = ::accept4(server_.listener_, nullptr, nullptr, SOCK_NONBLOCK | SOCK_CLOEXEC);
     if (fd < 0) return;  // none left (EAGAIN), or out of descriptors: the limit should prevent it
-    if (server_.open_connections_.fetch_add(1) >= server_.options_.max_connections) {
+    if (server_.open_connections_.fetch_add(1) >= server_.options_.max_connections &&
+        !evict_idle()) {
+      // Idle connections elsewhere (1 024 silent sockets of one client must
+      // not lock everyone else out until their deadlines): the loop holding
+      // the most decides.
+      if (Loop* other = server_.fullest_other(this); other && other->size() > 0) {
+        other->hand_over(fd);
+        continue;
+      }
       --server_.open_connections_;
-      // Over the limit: say so at once (best effort, never waiting) rather than queueing.
-      const Answer busy = status_answer(503, false);
-      [[maybe_unused]] const ssize_t sent =
-          ::send(fd, busy.head.data(), busy.head.size(), MSG_NOSIGNAL | MSG_DONTWAIT);
-      ::close(fd);
+      refuse_busy(fd);
       continue;
     }
-    const int one = 1;
-    ::setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
-    Connection& c = connections_[fd];
-    c.fd = fd;
-    c.deadline = now + server_.options_.read_timeout;
-    watch(c, EPOLLIN, EPOLL_CTL_ADD);
+    adopt(fd, now);
+  }
+}
+
+void Loop::adopt(int fd, Clock::time_point now) {
+  const int one = 1;
+  ::setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
+  Connection& c = connections_[fd];
+  c.fd = fd;
+  c.deadline = now + server_.options_.read_timeout;
+  watch(c, EPOLLIN, EPOLL_CTL_ADD);
+  size_.store(connections_.size(), std::memory_order_relaxed);
+}
+
+bool Loop::evict_idle() {
+  Connection* oldest = nullptr;
+  for (auto& [fd, c] : connections_) {
+    if (!c.writing && c.in.empty() && (!oldest || c.deadline < oldest->deadline)) oldest = &c;
+  }
+  if (!oldest) return false;
+  close_connection(*oldest);
+  return true;
+}
+
+void Loop::take_handed(Clock::time_point now) {
+  std::vector<int> handed;
+  {
+    std::lock_guard lock(handed_mutex_);
+    handed.swap(handed_);
+  }
+  // Each was counted in open_connections_ by the loop that accepted it.
+  for (int fd : handed) {
+    if (evict_idle()) {
+      adopt(fd, now);
+    } else {
+      --server_.open_connections_;
+      refuse_busy(fd);
+    }
   }
 }
 
@@ -323,6 +403,7 @@ void Loop::close_connection(Connection& c) {
   ::close(fd);  // also leaves the epoll set
   --server_.open_connections_;
   connections_.erase(fd);  // c is gone from here on
+  size_.store(connections_.size(), std::memory_order_relaxed);
 }
 
 void Loop::sweep(Clock::time_point now) {

@@ -13,6 +13,7 @@ class ThrottledSource final : public tiles::StoreSource {
       : inner_(std::move(inner)), link_(link), clock_(clock) {}
 
   std::string name() const override { return inner_->name(); }
+  bool holds_files() const override { return inner_->holds_files(); }
 
   Result<std::vector<std::byte>> fetch(const std::string& relative) const override {
     const auto start = clock_.now();

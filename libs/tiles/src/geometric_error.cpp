@@ -14,6 +14,7 @@
 #include "relief/base/lru_cache.h"
 #include "relief/tiles/store.h"
 #include "relief/tiles/store_layout.h"
+#include "relief/tiles/tile_file.h"
 
 namespace relief::tiles {
 namespace {
@@ -263,7 +264,7 @@ BorderedTileReader directory_tile_reader(const std::filesystem::path& root,
                                          const TileShape& shape) {
   return [root, shape](const TileKey& key) -> Result<std::shared_ptr<const Raster>> {
     const std::filesystem::path path = root / tile_relative_path(key);
-    const auto bytes = RELIEF_TRY(read_file(path));
+    const auto bytes = RELIEF_TRY(read_file(path, max_tile_file_bytes(shape)));
     Tile tile = RELIEF_TRY(decode_tile(bytes, path.string(), shape));
     return std::make_shared<const Raster>(std::move(tile.raster));
   };

@@ -72,7 +72,28 @@ Result<Tile> Store::read_tile(const geo::TileKey& key) const {
   }
   auto bytes = source_->fetch(tile_relative_path(key));
   if (!bytes) return std::unexpected(bytes.error());
-  return decode_tile(*bytes, path.string(), shape_);
+  Tile tile = RELIEF_TRY(decode_tile(*bytes, path.string(), shape_));
+  const IndexEntry& listed = *index(key.level).find(key);
+  RELIEF_CHECK(check_listed_tile(listed, tile.header,
+                                 source_->holds_files() ? bytes->size() : listed.file_bytes, path));
+  return tile;
+}
+
+// A valid tile file in the wrong place (two tiles swapped, a neighbour copied
+// over, another store's tile from a server or a cache) decodes without error;
+// the level index, which the store read first, says what this key's file is:
+// its size, its count of valid samples and bounds around its values.
+Status check_listed_tile(const IndexEntry& listed, const TileHeader& header, size_t file_bytes,
+                         const fs::path& path) {
+  const SampleStats& s = header.stats;
+  const bool same = listed.file_bytes == file_bytes && listed.valid_count == s.valid_count &&
+                    (s.valid_count == 0 || (s.min >= listed.min && s.max <= listed.max));
+  if (same) return {};
+  return fail(fmt::format(
+      "{}: is not the tile the level index lists for {} ({} bytes, {} valid samples; the index: "
+      "{} bytes, {} valid samples): a tile in the wrong place or from another store",
+      path.string(), listed.key.to_string(), file_bytes, s.valid_count, listed.file_bytes,
+      listed.valid_count));
 }
 
 Result<TileShape> tile_shape_of(const Manifest& m) {

@@ -21,43 +21,12 @@
 namespace relief::tiles {
 namespace {
 
-// A regular file of at most `cap` bytes; a FIFO or device (which could block
-// or never end) or a larger file is an error before anything is read.
-Result<std::vector<std::byte>> read_capped(const std::filesystem::path& path, uint64_t cap) {
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
-  if (fd < 0) return fail(fmt::format("{}: cannot open: {}", path.string(), errno_text(errno)));
-  struct stat st {};
-  std::string error;
-  if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
-    error = fmt::format("{}: not a regular file", path.string());
-  } else if (static_cast<uint64_t>(st.st_size) > cap) {
-    error = fmt::format("{}: {} bytes, larger than {}, the most this file can be", path.string(),
-                        st.st_size, format_bytes(cap));
-  }
-  std::vector<std::byte> bytes;
-  while (error.empty()) {
-    std::byte chunk[1 << 16];
-    const ssize_t n = ::read(fd, chunk, sizeof chunk);
-    if (n < 0 && errno == EINTR) continue;
-    if (n < 0) error = fmt::format("{}: read failed: {}", path.string(), errno_text(errno));
-    if (n <= 0) break;
-    if (bytes.size() + static_cast<size_t>(n) > cap) {  // it grew while being read
-      error = fmt::format("{}: larger than {}, the most this file can be", path.string(),
-                          format_bytes(cap));
-    }
-    bytes.insert(bytes.end(), chunk, chunk + n);
-  }
-  ::close(fd);
-  if (!error.empty()) return fail(error);
-  return bytes;
-}
-
 class LocalSource final : public StoreSource {
  public:
   explicit LocalSource(std::filesystem::path root) : root_(std::move(root)) {}
   std::string name() const override { return root_.string(); }
   Result<std::vector<std::byte>> fetch(const std::string& relative) const override {
-    auto bytes = RELIEF_TRY(read_capped(root_ / relative, caps_.cap(relative)));
+    auto bytes = RELIEF_TRY(read_file(root_ / relative, caps_.cap(relative)));
     caps_.learn(relative, bytes);
     return bytes;
   }

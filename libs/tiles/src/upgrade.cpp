@@ -8,6 +8,7 @@
 #include "relief/tiles/geometric_error.h"
 #include "relief/tiles/store.h"
 #include "relief/tiles/store_layout.h"
+#include "relief/tiles/store_source.h"
 
 namespace relief::tiles {
 namespace fs = std::filesystem;
@@ -17,7 +18,7 @@ namespace {
 // The manifest of a format-1 store, read as the current format (the fields
 // are the same; only what the indexes hold changed).
 Result<Manifest> read_old_manifest(const fs::path& path, int& version) {
-  const std::string text = RELIEF_TRY(read_text_file(path));
+  const std::string text = RELIEF_TRY(read_text_file(path, kMaxManifestBytes));
   nlohmann::json j;
   try {
     j = nlohmann::json::parse(text);
@@ -38,7 +39,7 @@ Result<Manifest> read_old_manifest(const fs::path& path, int& version) {
 // build writes (re-serializing the old ones would widen min/max once more).
 Result<LevelIndex> read_old_index(const fs::path& root, int level, Executor& executor) {
   const fs::path path = root / level_index_relative_path(level);
-  const auto bytes = RELIEF_TRY(read_file(path));
+  const auto bytes = RELIEF_TRY(read_file(path, kMaxLevelIndexBytes));
   const LevelIndex old = RELIEF_TRY(LevelIndex::parse_for_upgrade(bytes, path.string()));
   if (old.level() != level) {
     return fail(fmt::format("{}: index is for level {}", path.string(), old.level()));
@@ -49,7 +50,7 @@ Result<LevelIndex> read_old_index(const fs::path& root, int level, Executor& exe
   executor.parallel_for(entries.size(), [&](size_t i) {
     if (error.failed()) return;
     const fs::path tile = root / tile_relative_path(entries[i].key);
-    auto file = read_file(tile);
+    auto file = read_file(tile, max_file_bytes(tile_relative_path(entries[i].key), std::nullopt));
     if (!file) return error.set(file.error());
     auto header = parse_tile_header(*file, tile.string());
     if (!header) return error.set(header.error());
@@ -59,6 +60,19 @@ Result<LevelIndex> read_old_index(const fs::path& root, int level, Executor& exe
   LevelIndex index(level);
   for (const IndexEntry& e : fresh) index.add(e);
   return index;
+}
+
+// Whether a level index of the store is of format version 1.
+Result<bool> has_version1_index(const fs::path& root, const Manifest& manifest) {
+  for (int level = manifest.min_level; level <= manifest.max_level; ++level) {
+    const fs::path path = root / level_index_relative_path(level);
+    const auto bytes = RELIEF_TRY(read_file(path, kMaxLevelIndexBytes));
+    if (!LevelIndex::parse(bytes, path.string()) &&
+        LevelIndex::parse_for_upgrade(bytes, path.string())) {
+      return true;
+    }
+  }
+  return false;
 }
 
 }  // namespace
@@ -72,7 +86,13 @@ Result<UpgradeReport> upgrade_store(const fs::path& root, Executor& executor, Pr
   report.to_version = kStoreFormatVersion;
   const fs::path manifest_path = root / kManifestName;
   Manifest manifest = RELIEF_TRY(read_old_manifest(manifest_path, report.from_version));
-  if (report.from_version == kStoreFormatVersion) return report;
+  if (report.from_version == kStoreFormatVersion) {
+    // A current manifest over version-1 indices (an upgrade killed between
+    // its indices and its manifest, indices copied in): readers refuse those
+    // and send the user here, so they are upgraded too.
+    if (!RELIEF_TRY(has_version1_index(root, manifest))) return report;
+    report.from_version = 1;
+  }
   const TileShape shape = RELIEF_TRY(tile_shape_of(manifest));
 
   std::vector<LevelIndex> indices;

@@ -11,7 +11,7 @@ namespace relief::view {
 
 namespace {
 // A factor this close to 1 is 1: the threshold is the one given, bit for bit.
-constexpr double kSnap = 0.01;
+constexpr double kBudgetSnap = 0.01;
 
 double towards(double target, double factor, double dt, double seconds) {
   const double keep = seconds > 0 ? std::exp(-std::max(dt, 0.0) / seconds) : 0;
@@ -21,7 +21,7 @@ double towards(double target, double factor, double dt, double seconds) {
 
 double FrameBudget::update(double frame_ms, double dt, bool moving, double floor) {
   const FrameBudgetOptions& o = options_;
-  floor = std::clamp(floor, kSnap, 1.0);  // a factor of 0 would be no threshold at all
+  floor = std::clamp(floor, kBudgetSnap, 1.0);  // a factor of 0 would be no threshold at all
   if (o.target_ms <= 0) {
     factor_ = 1;
   } else if (!moving) {
@@ -35,8 +35,8 @@ double FrameBudget::update(double frame_ms, double dt, bool moving, double floor
   // Never finer than the still threshold, whatever the floor was before.
   factor_ = std::max(factor_, moving ? floor : 1.0);
   // Snapped from above only: a factor tightening below 1 moves by less than
-  // kSnap a frame when frames come often and must not be caught at 1.
-  if (factor_ > 1 && factor_ - 1 < kSnap) factor_ = 1;
+  // kBudgetSnap a frame when frames come often and must not be caught at 1.
+  if (factor_ > 1 && factor_ - 1 < kBudgetSnap) factor_ = 1;
   return factor_;
 }
 

@@ -18,8 +18,10 @@ Result<PathFile> parse_path(const std::string& text, const std::string& where_fi
   if (doc.is_discarded() || !doc.is_object()) return fail(path + ": not a JSON object");
   PathFile file;
   if (doc.contains("fps")) {
-    if (!doc["fps"].is_number() || !(doc["fps"].get<double>() > 0)) {
-      return fail(path + ": \"fps\" must be a number > 0");
+    if (!doc["fps"].is_number() || !(doc["fps"].get<double>() >= kMinPathFps) ||
+        !(doc["fps"].get<double>() <= kMaxPathFps)) {
+      return fail(fmt::format("{}: \"fps\" must be a number in [{:g}, {:g}]", path, kMinPathFps,
+                              kMaxPathFps));
     }
     file.fps = doc["fps"].get<double>();
   }
@@ -58,9 +60,23 @@ Result<PathFile> parse_path(const std::string& text, const std::string& where_fi
 }
 
 Result<PathFile> read_path_file(const std::string& path, const CameraParser& camera) {
-  auto bytes = RELIEF_TRY(read_file(path));
+  auto bytes = RELIEF_TRY(read_file(path, kMaxPathFileBytes));
   return parse_path(std::string(reinterpret_cast<const char*>(bytes.data()), bytes.size()), path,
                     camera);
+}
+
+Result<size_t> count_path_frames(const std::vector<lod::Keyframe>& keyframes, double fps,
+                                 int max_frames, const std::string& where) {
+  const double duration = keyframes.back().time - keyframes.front().time;
+  // In double: a huge duration must not overflow the frame count.
+  const double frames = std::floor(duration * fps + 1e-9) + 1;
+  if (!(frames <= max_frames)) {
+    return fail(
+        fmt::format("{}: {:.6g} s at {:g} fps is {:.6g} frames, more than "
+                    "--max-frames {} (raise it for longer paths)",
+                    where, duration, fps, frames, max_frames));
+  }
+  return static_cast<size_t>(frames);
 }
 
 std::string path_to_json(const PathFile& file) {

@@ -11,7 +11,7 @@ namespace relief::view {
 
 namespace {
 // A factor this close to 1 is 1: the threshold is the still one, bit for bit.
-constexpr double kSnap = 0.01;
+constexpr double kSpeedSnap = 0.01;
 }  // namespace
 
 double SpeedLod::threshold(double still_pixels, double dt, double angular_speed,
@@ -32,7 +32,7 @@ double SpeedLod::threshold(double still_pixels, double dt, double angular_speed,
     const double keep = options_.settle_seconds > 0 ? std::exp(-dt / options_.settle_seconds) : 0;
     factor_ = target + (factor_ - target) * keep;
   }
-  if (factor_ - 1 < kSnap) factor_ = 1;
+  if (factor_ - 1 < kSpeedSnap) factor_ = 1;
   return factor_ == 1 ? still_pixels : still_pixels * factor_;
 }
 

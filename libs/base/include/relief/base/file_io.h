@@ -3,6 +3,7 @@
 // atomic writes (temporary file in the same directory, fsync, rename), so a
 // crash or a full disk never leaves a partial file under the final name.
 #include <cstddef>
+#include <cstdint>
 #include <filesystem>
 #include <span>
 #include <string>
@@ -12,8 +13,20 @@
 
 namespace relief {
 
-Result<std::vector<std::byte>> read_file(const std::filesystem::path& path);
-Result<std::string> read_text_file(const std::filesystem::path& path);
+// Reads a whole regular file of at most `max_bytes` (through symlinks). A FIFO,
+// device, socket or directory is refused before anything is read (a FIFO
+// would block, /dev/zero never end), and so is a larger file (a sparse
+// terabyte is an error, not a read); a file that grows past `max_bytes` while
+// it is read too. Every caller says how large its file can sensibly be.
+Result<std::vector<std::byte>> read_file(const std::filesystem::path& path, uint64_t max_bytes);
+// For a file whose size the caller already trusts (tests reading what they wrote).
+inline constexpr uint64_t kNoSizeLimit = UINT64_MAX;
+Result<std::string> read_text_file(const std::filesystem::path& path, uint64_t max_bytes);
+
+// Whether `path` (through symlinks) is a regular file; otherwise a one-line
+// error naming it and what it is ("is a FIFO, not a regular file"). For
+// inputs handed to a library that opens them itself (GDAL).
+Status check_regular_file(const std::filesystem::path& path);
 
 // Whether a rename may replace `path`: it is absent, or a regular file (through
 // symlinks). A device node, FIFO, socket or directory is refused with a one-line

@@ -51,6 +51,11 @@ Result<TileShape> tile_shape_of(const Manifest& manifest);
 
 // The index record of a tile file with this header and size.
 IndexEntry index_entry_for(const geo::TileKey& key, const TileHeader& header, size_t file_bytes);
+// Whether a tile file (its header and size) is the one `listed` describes; an
+// error naming `path` if not (a valid tile in the wrong place). Store::read_tile
+// checks every tile it reads.
+Status check_listed_tile(const IndexEntry& listed, const TileHeader& header, size_t file_bytes,
+                         const std::filesystem::path& path);
 
 Status write_tile_file(const std::filesystem::path& root, const geo::TileKey& key,
                        std::span<const std::byte> bytes);

@@ -24,6 +24,10 @@ class StoreSource {
   // The bytes of the file at `relative` ("manifest.json", "3/index.rli",
   // tile paths); errors name the file.
   virtual Result<std::vector<std::byte>> fetch(const std::string& relative) const = 0;
+  // Whether fetch() gives the store's files as written, whose sizes the level
+  // indices list (a directory, a server, a cache of either); false for stores
+  // made in memory, which encode their tiles when fetched.
+  virtual bool holds_files() const { return true; }
   // Whether the bytes are a whole, uncorrupted store file of that name
   // (checksums of tiles and indices, JSON of the manifest).
   static Status verify(const std::string& relative, std::span<const std::byte> bytes);
