@@ -1,8 +1,8 @@
 #pragma once
 // Cheap bounds of the angle bound that vertical_error_parts() (screen_error.h)
 // computes, f m (S + T C) / z_min, for the cube that refinement puts around a
-// diamond's ball (refine.cpp, pixels()). The exact value takes the box's
-// eight corners (a square root and a division each) and five trigonometric
+// diamond's ball (refine_criterion.cpp, pixels()). The exact value takes the
+// box's eight corners (a square root and a division each) and five trigonometric
 // calls; most diamonds are far enough from the threshold that these bounds,
 // from the cube's centre alone, settle which side of it they are on, and
 // refinement evaluates the exact value only for the others: the same
@@ -32,7 +32,7 @@ struct AngleBoundRange {
   // the distance bound alone (a corner behind), and nothing below holds.
   bool in_front = false;
   double lo = 0, hi = 0;  // lo <= f m (S + T C) / z_min <= hi
-  // The terms' bounds, for decisions' margins (refine.cpp, margin()).
+  // The terms' bounds, for decisions' margins (refine_margins.cpp, margin()).
   double z_lo = 0, z_hi = 0, t_lo = 0, t_hi = 0, s_lo = 0, s_hi = 0, c_lo = 0, c_hi = 0;
 };
 

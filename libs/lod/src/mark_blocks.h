@@ -25,7 +25,7 @@ namespace relief::lod {
 // the halves' corners (always vertices) and samples' sides (never split) have
 // no mark.
 // Zeroed blocks of marks, kept for the next frame once allocated. One per
-// thread that writes marks (refine.cpp's lanes each have their own).
+// thread that writes marks (refine_lanes.cpp's lanes each have their own).
 class MarkBlocks {
  public:
   static constexpr uint32_t kBlockBytes = 256;

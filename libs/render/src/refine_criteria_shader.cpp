@@ -3,9 +3,9 @@
 namespace relief::render {
 
 // One invocation per four diamond slots of one quad, packed as four bytes of
-// one uint: lod::CriterionClass of the criterion refine.cpp's pixels()
-// computes exactly, in the same order of operations (its shortcuts only
-// settle which side of the threshold a value is on): the diamond's ball
+// one uint: lod::CriterionClass of the criterion refine_criterion.cpp's
+// pixels() computes exactly, in the same order of operations (its shortcuts
+// only settle which side of the threshold a value is on): the diamond's ball
 // from the grid's sines and cosines (angle sums), its box, then
 // screen_error.cpp's vertical_error_parts() with the area's normals.
 const char* const kRefineCriteriaShader = R"(#version 450 core

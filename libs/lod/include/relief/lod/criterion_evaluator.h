@@ -55,8 +55,8 @@ struct CriterionFrame {
   // The first slot of each class (2k - 2 classes, the halves' centres
   // excluded: always split), then the end of the last.
   std::span<const uint32_t> class_offsets;
-  // Terms of a diamond's ball (refine.cpp): metres of chord per radian, and
-  // metres for the rounding of its centre.
+  // Terms of a diamond's ball (refine_criterion.cpp): metres of chord per
+  // radian, and metres for the rounding of its centre.
   double arc = 0, rounding = 0;
   // Values within pixel_error x (1 +- band) are kNear.
   double band = 1e-6;

@@ -72,10 +72,10 @@ class RefineCache {
 };
 
 // What the last frames decided per quad, for the next frame to reuse where
-// the camera moved too little to change any decision (refine.cpp, "Reusing
-// decisions"): the mesh is the one refinement without history computes, at a
-// fraction of the cost. One per sequence of frames of one terrain (a scene),
-// used by one thread at a time.
+// the camera moved too little to change any decision (refine_reuse.cpp;
+// docs/rendering.md, "Reusing decisions"): the mesh is the one refinement
+// without history computes, at a fraction of the cost. One per sequence of
+// frames of one terrain (a scene), used by one thread at a time.
 class RefineHistory {
  public:
   RefineHistory();

@@ -32,7 +32,7 @@ double vertical_error_pixels(const View& view, const Box& box, const geo::GeoBox
                              double metres);
 
 // The same bound with the terms it is made of, for callers that bound how
-// far it can move when the view does (refine.cpp reusing decisions).
+// far it can move when the view does (refine_margins.cpp, reusing decisions).
 struct VerticalErrorParts {
   double pixels = 0;          // vertical_error_pixels()
   double distance = 0;        // from the eye to the box
