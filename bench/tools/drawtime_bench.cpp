@@ -171,7 +171,7 @@ Result<int> draw_until_complete(view::Scene& scene, const lod::Camera& camera,
   return fail("no complete frame after 5000 frames");
 }
 
-// The texture keys the last frame drew (composite_for in terrain_renderer.cpp:
+// The texture keys the last frame drew (composite_for in terrain_composites.cpp:
 // each quad's tile at the store's finest level or above, where it has data).
 std::vector<geo::TileKey> drawn_tiles(const view::Scene& scene, const tiles::Store& store) {
   std::set<geo::TileKey> keys;
