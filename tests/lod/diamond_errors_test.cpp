@@ -12,6 +12,7 @@
 #include "../ingest/built_stores.h"
 #include "diamond_errors.h"
 #include "relief/lod/mesh_topology.h"
+#include "relief/lod/terrain_model.h"
 
 namespace relief::lod {
 namespace {

@@ -6,6 +6,8 @@
 #include <emmintrin.h>
 #endif
 
+#include "relief/lod/data_window.h"
+
 namespace relief::lod {
 
 namespace {
@@ -159,12 +161,12 @@ void full_mesh_heights(const MarkGrid& grid, const tiles::Raster& tile, int bord
   if (border < 1 || tile.width() < n + 2 * border || tile.height() < n / 2 + 2 * border) {
     for (int32_t y = 0; y <= n; ++y) {
       for (int32_t x = y % 2; x <= 2 * n; x += 2) {
-        fm[grid.id({x, y})] = TerrainModel::bilinear(tile, border, x / 2.0, y / 2.0);
+        fm[grid.id({x, y})] = bilinear_height(tile, border, x / 2.0, y / 2.0);
       }
     }
     return;
   }
-  // TerrainModel::bilinear's arithmetic where it needs no clamping (a border
+  // bilinear_height()'s arithmetic where it needs no clamping (a border
   // of at least one sample): a sample centre (x, y odd) is the sample, a
   // corner (x, y even) its four samples' weights of one half.
   const int w = tile.width();

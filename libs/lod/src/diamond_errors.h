@@ -24,7 +24,7 @@
 
 #include "edge_marks.h"
 #include "relief/base/result.h"
-#include "relief/lod/terrain_model.h"
+#include "relief/tiles/raster.h"
 
 namespace relief::lod {
 

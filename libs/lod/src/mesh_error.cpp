@@ -4,8 +4,6 @@
 #include <cmath>
 #include <vector>
 
-#include "relief/lod/terrain_model.h"
-
 namespace relief::lod {
 namespace {
 
@@ -25,7 +23,7 @@ class MeshHeights {
       : m_(m), w_(w), heights_(m.vertices().size()) {
     for (size_t i = 0; i < heights_.size(); ++i) {
       const MeshVertex& v = m.vertices()[i];
-      heights_[i] = TerrainModel::bilinear(t, border, w.x0 + v.u * w.width, w.y0 + v.v * w.height);
+      heights_[i] = bilinear_height(t, border, w.x0 + v.u * w.width, w.y0 + v.v * w.height);
     }
   }
 
@@ -101,14 +99,14 @@ double mesh_sample_error(const MeshTopology& m, const tiles::Raster& t, int bord
   // The sample corners of the full mesh (bilinear means of four samples).
   for (int j = j0; j <= j0 + jh; ++j) {
     for (int i = i0; i <= i0 + iw; ++i) {
-      worst = std::max(worst, mesh.error_at(i, j, TerrainModel::bilinear(t, border, i, j)));
+      worst = std::max(worst, mesh.error_at(i, j, bilinear_height(t, border, i, j)));
     }
   }
   // Split border triangles of one-sample squares put vertices halfway along
   // cell sides, where the full mesh is the mean of the two corners.
   auto side_midpoint = [&](double x, double y, double ax, double ay, double bx, double by) {
-    const double value = 0.5 * (TerrainModel::bilinear(t, border, ax, ay) +
-                                TerrainModel::bilinear(t, border, bx, by));
+    const double value =
+        0.5 * (bilinear_height(t, border, ax, ay) + bilinear_height(t, border, bx, by));
     worst = std::max(worst, mesh.error_at(x, y, value));
   };
   for (int i = i0; i < i0 + iw; ++i) {

@@ -2,8 +2,8 @@
 // The exact error of a quad's mesh against the data samples it covers: a pure
 // function of the tile, so the loader's threads can measure it as a finest
 // tile arrives (terrain_model.cpp) instead of the render thread.
+#include "relief/lod/data_window.h"
 #include "relief/lod/mesh_topology.h"
-#include "relief/lod/terrain_model.h"
 #include "relief/tiles/raster.h"
 
 namespace relief::lod {

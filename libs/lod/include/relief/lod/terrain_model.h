@@ -13,20 +13,13 @@
 #include <vector>
 
 #include "relief/base/result.h"
+#include "relief/lod/data_window.h"
 #include "relief/lod/mesh_topology.h"
 #include "relief/lod/tile_provider.h"
 #include "relief/lod/vec.h"
 #include "relief/tiles/store.h"
 
 namespace relief::lod {
-
-// Where a quad's samples are in a data tile: interior sample coordinates
-// (x right, y down, 0 at the tile's west/north edge) of quad-space (u, v) are
-// (x0 + u * width, y0 + v * height).
-struct DataWindow {
-  std::optional<geo::TileKey> tile;  // nullopt: no data, height 0
-  double x0 = 0, y0 = 0, width = 0, height = 0;
-};
 
 struct HeightRange {
   double lo = 0, hi = 0;
@@ -135,8 +128,10 @@ class TerrainModel {
   Result<double> level_error(const geo::TileKey& key);
 
   // Bilinear height at interior sample coordinates (x, y) of a bordered tile,
-  // exactly as the renderer's vertex shader computes it.
-  static float bilinear(const tiles::Raster& bordered, int border, double x, double y);
+  // exactly as the renderer's vertex shader computes it (data_window.h).
+  static float bilinear(const tiles::Raster& bordered, int border, double x, double y) {
+    return bilinear_height(bordered, border, x, y);
+  }
 
   // Exact errors of quads at and below the store's finest level: how many
   // were measured on this (the render) thread and how many came prepared by
