@@ -29,6 +29,13 @@ Vec3 ecef(double lon_deg, double lat_deg, double height_m) {
   return {e.x, e.y, e.z};
 }
 
+double distance_to(const Box& b, const Vec3& p) {
+  const double dx = std::max({b.lo.x - p.x, 0.0, p.x - b.hi.x});
+  const double dy = std::max({b.lo.y - p.y, 0.0, p.y - b.hi.y});
+  const double dz = std::max({b.lo.z - p.z, 0.0, p.z - b.hi.z});
+  return std::sqrt(dx * dx + dy * dy + dz * dz);
+}
+
 Camera look_at(double lon, double lat, double height, double range, double heading, double pitch,
                double fov_y, int width, int height_px) {
   // Direction from the camera to the target in the target's local frame,

@@ -55,13 +55,6 @@ Box quad_box(const geo::TileKey& key, const HeightRange& range) {
 
 }  // namespace
 
-double distance_to(const Box& b, const Vec3& p) {
-  const double dx = std::max({b.lo.x - p.x, 0.0, p.x - b.hi.x});
-  const double dy = std::max({b.lo.y - p.y, 0.0, p.y - b.hi.y});
-  const double dz = std::max({b.lo.z - p.z, 0.0, p.z - b.hi.z});
-  return std::sqrt(dx * dx + dy * dy + dz * dz);
-}
-
 // Looked up two or three times per quad the selection visits, a few
 // thousand quads per frame: open addressing (one cache miss, not a bucket's
 // and a node's), the records in a deque so their addresses stay valid while

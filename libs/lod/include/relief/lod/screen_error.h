@@ -21,9 +21,16 @@
 // (the second also holds for boxes reaching behind the eye).
 #include "relief/geo/tile_key.h"
 #include "relief/lod/camera.h"
-#include "relief/lod/terrain_model.h"
+#include "relief/lod/vec.h"
 
 namespace relief::lod {
+
+// The geodetic normals over an area: within `spread` radians of the centre's
+// `up` (area_normals()), with the spread's cosine and sine.
+struct AreaNormals {
+  Vec3 up;
+  double cos_spread = 1, sin_spread = 0;
+};
 
 // Upper bound of the screen distance between the two ends of a vertical
 // segment of length `metres` lying in `box`, at a point of `area`; INFINITY

@@ -15,6 +15,7 @@
 #include "relief/base/result.h"
 #include "relief/lod/data_window.h"
 #include "relief/lod/mesh_topology.h"
+#include "relief/lod/screen_error.h"
 #include "relief/lod/tile_provider.h"
 #include "relief/lod/vec.h"
 #include "relief/tiles/store.h"
@@ -24,21 +25,6 @@ namespace relief::lod {
 struct HeightRange {
   double lo = 0, hi = 0;
 };
-
-// An axis-aligned box in ECEF metres.
-struct Box {
-  Vec3 lo, hi;
-};
-
-// The geodetic normals over an area: within `spread` radians of the centre's
-// `up` (screen_error.h, area_normals), with the spread's cosine and sine.
-struct AreaNormals {
-  Vec3 up;
-  double cos_spread = 1, sin_spread = 0;
-};
-
-// Distance from a point to the nearest point of the box (0 inside).
-double distance_to(const Box& box, const Vec3& point);
 
 // Used by one thread at a time (the render thread): its caches are not locked.
 class TerrainModel {

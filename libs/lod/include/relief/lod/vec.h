@@ -25,6 +25,14 @@ inline Vec3 normalize(const Vec3& a) {
   return a * (1.0 / length(a));
 }
 
+// An axis-aligned box in ECEF metres.
+struct Box {
+  Vec3 lo, hi;
+};
+
+// Distance from a point to the nearest point of the box (0 inside).
+double distance_to(const Box& box, const Vec3& point);
+
 // Geodetic surface normal (the "up" of the local east-north-up frame).
 Vec3 up_at(double lon_deg, double lat_deg);
 Vec3 east_at(double lon_deg);
