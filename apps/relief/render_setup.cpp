@@ -148,7 +148,12 @@ Result<RenderSetup> parse_render_setup(const Args& args, TextureLayers textures,
   s.sky = render::RenderOptions{}.sky;
   if (auto text = args.get("--sky")) {
     auto c = RELIEF_TRY(parse_numbers("--sky", *text, 3));
-    for (int i = 0; i < 3; ++i) s.sky[i] = static_cast<float>(std::clamp(c[i], 0.0, 255.0) / 255);
+    for (int i = 0; i < 3; ++i) {
+      if (!(c[i] >= 0 && c[i] <= 255)) {
+        return fail(fmt::format("--sky: '{}': each of R,G,B must be in 0..255", *text));
+      }
+      s.sky[i] = static_cast<float>(c[i] / 255);
+    }
   }
   s.gpu_budget = RELIEF_TRY(byte_option(args, "--gpu-budget", s.gpu_budget));
 

@@ -89,6 +89,8 @@ TEST_F(HostileInputs, SizesThatWrapAtTwoToThe32AreRefused) {
   expect_refused(render({"--look-at", "1.5,42.5,1500,40000,0,-30", "--size", "4294967297x1"}),
                  {"--size: '4294967297x1' is not WxH between 1x1 and 16384x16384"});
   expect_refused(render({"--look-at", "1.5,42.5,1500,40000,0,-30", "--size", "-5x10"}), {"--size"});
+  expect_refused(render({"--look-at", "1.5,42.5,1500,40000,0,-30", "--sky", "300,0,-1"}),
+                 {"--sky: '300,0,-1': each of R,G,B must be in 0..255"});
   expect_refused({"build", data("srtm/N42E001.hgt.zip"), "-o", at("b").string(), "--kind",
                   "elevation", "--tile-size", "4294967808x4294967552"},
                  {"--tile-size: '4294967808x4294967552' is not WxH"});
