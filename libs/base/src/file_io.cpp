@@ -11,6 +11,7 @@
 #include <atomic>
 #include <cerrno>
 #include <cstring>
+
 #include "relief/base/units.h"
 
 namespace relief {

@@ -67,11 +67,11 @@ Dataset open_raster(const std::string& path) {
   CPLErrorReset();
   // GDAL would wait on a FIFO for a writer forever and read a device without
   // end: only regular files (and directories, which some formats are) open.
-  if (const auto file = local_file_of(path)) {
-    struct stat st {};
-    if (::stat(file->c_str(), &st) == 0 && !S_ISREG(st.st_mode) && !S_ISDIR(st.st_mode)) {
+  std::error_code ec;
+  if (const auto file = local_file_of(path); file && !std::filesystem::is_directory(*file, ec)) {
+    if (auto regular = check_regular_file(*file); !regular) {
       // Callers put `path` before the message: name the file only if it is another.
-      std::string message = check_regular_file(*file).error().message;
+      std::string message = regular.error().message;
       if (file->string() == path) message.erase(0, path.size() + 2);
       CPLError(CE_Failure, CPLE_OpenFailed, "%s", message.c_str());
       return nullptr;
