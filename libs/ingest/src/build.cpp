@@ -402,8 +402,8 @@ class Builder {
     if (o_.kind == tiles::DatasetKind::Elevation) {
       // From the tile files just written: the errors of what readers decode.
       const tiles::TileShape shape = RELIEF_TRY(tiles::tile_shape_of(report.manifest));
-      RELIEF_CHECK(
-          tiles::compute_geometric_errors(indices, shape, tile_reader(shape), ex_, progress_));
+      RELIEF_CHECK(tiles::compute_geometric_errors(indices, shape, tile_reader(shape), ex_,
+                                                   progress_, interior_reader()));
       lap("errors");
     }
     for (const auto& index : indices) RELIEF_CHECK(tiles::write_level_index(o_.output, index));
@@ -641,6 +641,13 @@ class Builder {
     return [this](const TileKey& key) -> Result<std::shared_ptr<const tiles::Raster>> {
       return std::make_shared<const tiles::Raster>(RELIEF_TRY(bordered_tile(key)));
     };
+  }
+
+  // The finest tiles' interiors for the geometric errors: their cores, not
+  // copied into a bordered tile. Lossless codecs only (see tile_reader).
+  tiles::BorderedTileReader interior_reader() {
+    if (codec_.codec != tiles::Codec::Zstd) return {};
+    return [this](const TileKey& key) { return cores_.read(key); };
   }
 
   // Writes one bordered tile unless a valid one is already there.

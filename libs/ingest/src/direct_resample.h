@@ -29,8 +29,11 @@ class DirectResampler {
   static std::optional<DirectResampler> create(GDALDatasetH ds, double destination_spacing);
 
   // Paints the valid bilinear samples of the source over `tile` (the interior
-  // of `key`), leaving the others untouched, as GDAL mosaics sources.
-  Status resample(const geo::TileGrid& grid, const geo::TileKey& key, tiles::Raster& tile) const;
+  // of `key`), leaving the others untouched, as GDAL mosaics sources. With
+  // `cover` (the first source painted) the others are set to nodata: `tile`
+  // may then start uninitialised, and its samples are written once.
+  Status resample(const geo::TileGrid& grid, const geo::TileKey& key, tiles::Raster& tile,
+                  bool cover = false) const;
 
   // Source reads take this lock (for a dataset shared between threads).
   void serialise_reads(std::mutex* m) { read_mutex_ = m; }
@@ -42,6 +45,7 @@ class DirectResampler {
   int width_ = 0, height_ = 0;
   bool has_nodata_ = false;
   double nodata_ = 0;
+  bool exact_in_float_ = false;  // a float holds every value of the band's type
 };
 
 // Direct resamplers shared by every worker of a build: one GDAL dataset per

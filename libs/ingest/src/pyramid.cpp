@@ -1,5 +1,6 @@
 #include "pyramid.h"
 
+#include <algorithm>
 #include <cassert>
 #include <cmath>
 #include <limits>
@@ -60,7 +61,12 @@ void downsample_rgba(const tiles::Raster& child, tiles::Raster& parent, int ox, 
 
 tiles::Raster downsample(const std::array<const tiles::Raster*, 4>& children, int width, int height,
                          tiles::SampleType type) {
-  tiles::Raster parent = tiles::Raster::empty(type, width, height);
+  // Four children of elevation write every sample of the parent; otherwise
+  // what no child covers stays nodata (and so does imagery's no-sample pixel).
+  const bool all = std::all_of(children.begin(), children.end(), [](auto* c) { return c; });
+  tiles::Raster parent = all && type == tiles::SampleType::Float32
+                             ? tiles::Raster::uninitialised(type, 1, width, height)
+                             : tiles::Raster::empty(type, width, height);
   for (int c = 0; c < 4; ++c) {
     const tiles::Raster* child = children[static_cast<size_t>(c)];
     if (!child) continue;

@@ -109,8 +109,14 @@ const DirectResampler* TileWarper::direct_for(size_t g, int level) {
 
 Result<tiles::Raster> TileWarper::warp_direct(const geo::TileKey& key,
                                               const std::vector<size_t>& groups) {
-  tiles::Raster r = tiles::Raster::empty(tiles::SampleType::Float32, grid_.width(), grid_.height());
-  for (size_t g : groups) RELIEF_CHECK(direct_for(g, key.level)->resample(grid_, key, r));
+  if (groups.empty())
+    return tiles::Raster::empty(tiles::SampleType::Float32, grid_.width(), grid_.height());
+  // The first group covers every sample (nodata where it has none): no fill
+  // beforehand, which cost a build a twentieth of its time.
+  tiles::Raster r =
+      tiles::Raster::uninitialised(tiles::SampleType::Float32, 1, grid_.width(), grid_.height());
+  for (size_t g : groups)
+    RELIEF_CHECK(direct_for(g, key.level)->resample(grid_, key, r, g == groups.front()));
   return r;
 }
 

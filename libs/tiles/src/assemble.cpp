@@ -10,7 +10,11 @@ namespace relief::tiles {
 Raster assemble_bordered(const std::array<const Raster*, 9>& neighbours, int width, int height,
                          int border, SampleType type) {
   assert(border <= width && border <= height);
-  Raster out = Raster::empty(type, width + 2 * border, height + 2 * border);
+  // With all nine neighbours every sample is copied from one of them.
+  const bool all = std::all_of(neighbours.begin(), neighbours.end(), [](auto* n) { return n; });
+  Raster out = all ? Raster::uninitialised(type, type == SampleType::Float32 ? 1 : 4,
+                                           width + 2 * border, height + 2 * border)
+                   : Raster::empty(type, width + 2 * border, height + 2 * border);
   // Source start and destination start along one axis for offsets -1, 0, +1.
   auto span = [border](int d, int size, int& src, int& dst, int& len) {
     if (d < 0) {

@@ -88,9 +88,10 @@ class BlockRanges {
 // exactly the u that full_mesh_height computes from x = (gx + 0.5) 2^-m.
 // A cell whose mesh and samples cannot be further apart than `worst` (their
 // height ranges say so) is skipped: it cannot change the maximum.
-void raise_deviation(const Raster& fine, const BlockRanges& ranges, const Raster& ancestor,
-                     const TileShape& shape, const TileKey& f, const TileKey& a, int m,
-                     std::vector<double>& us, std::vector<float>& corners, double& worst_out) {
+void raise_deviation(const Raster& fine, int fine_border, const BlockRanges& ranges,
+                     const Raster& ancestor, const TileShape& shape, const TileKey& f,
+                     const TileKey& a, int m, std::vector<double>& us, std::vector<float>& corners,
+                     double& worst_out) {
   double worst = worst_out;  // in a register, not stored through the reference per sample
   const int border = shape.border;
   const int w = shape.width - 2 * border, h = shape.height - 2 * border;
@@ -143,8 +144,8 @@ void raise_deviation(const Raster& fine, const BlockRanges& ranges, const Raster
         // cell_height's terms, the row's part first as it adds them.
         double row[4];
         for (int t = 0; t < 4; ++t) row[t] = cell.a[t] + cell.c[t] * v;
-        const float* line = values.data() + static_cast<size_t>(gy - gy0 + border) * stride +
-                            static_cast<size_t>(border);
+        const float* line = values.data() + static_cast<size_t>(gy - gy0 + fine_border) * stride +
+                            static_cast<size_t>(fine_border);
         // A nodata sample (NaN) counts as a distance of 0.
         auto distance = [&](int64_t gx) {
           const double u = us[static_cast<size_t>(gx - gx0)];
@@ -182,7 +183,7 @@ float round_up_to_float(double distance) {
 
 Status compute_geometric_errors(std::span<LevelIndex> indices, const TileShape& shape,
                                 const BorderedTileReader& read, Executor& executor,
-                                Progress& progress) {
+                                Progress& progress, const BorderedTileReader& read_interior) {
   if (indices.empty()) return {};
   const int finest = indices.back().level();
   // One slot per entry, in entries() order (sorting here, before the workers
@@ -209,9 +210,10 @@ Status compute_geometric_errors(std::span<LevelIndex> indices, const TileShape& 
     return tile;
   };
   auto errors_below = [&](const TileKey& f) -> Status {
-    const auto fine = RELIEF_TRY(read(f));
+    const auto fine = RELIEF_TRY(read_interior ? read_interior(f) : read(f));
     if (!fine) return {};
-    const BlockRanges ranges(*fine, shape.border, shape.width - 2 * shape.border,
+    const int fine_border = read_interior ? 0 : shape.border;
+    const BlockRanges ranges(*fine, fine_border, shape.width - 2 * shape.border,
                              shape.height - 2 * shape.border);
     std::vector<double> us;
     std::vector<float> corners;
@@ -226,7 +228,7 @@ Status compute_geometric_errors(std::span<LevelIndex> indices, const TileShape& 
           worst[l][static_cast<size_t>(entry - indices[l].entries().data())];
       // Starting from what other finest tiles found lets more cells be skipped.
       double local = std::bit_cast<float>(slot.load(std::memory_order_relaxed));
-      raise_deviation(*fine, ranges, *tile, shape, f, a, m, us, corners, local);
+      raise_deviation(*fine, fine_border, ranges, *tile, shape, f, a, m, us, corners, local);
       raise_to(slot, round_up_to_float(local));
     }
     return {};

@@ -29,20 +29,29 @@ size_t sample_size(SampleType t) {
   return t == SampleType::Float32 ? 4 : 1;
 }
 
-Raster::Raster(SampleType type, int bands, int width, int height)
+Raster::Raster(Uninitialised, SampleType type, int bands, int width, int height)
     : type_(type), bands_(bands), width_(width), height_(height) {
   assert(width >= 0 && height >= 0 && bands > 0);
   bytes_.resize(pixel_count() * static_cast<size_t>(bands) * sample_size(type));
 }
 
+Raster::Raster(SampleType type, int bands, int width, int height)
+    : Raster(Uninitialised{}, type, bands, width, height) {
+  std::fill(bytes_.begin(), bytes_.end(), std::byte{0});
+}
+
+Raster Raster::uninitialised(SampleType type, int bands, int width, int height) {
+  return Raster(Uninitialised{}, type, bands, width, height);
+}
+
 Raster Raster::empty(SampleType type, int width, int height) {
   if (type == SampleType::Float32) {
-    Raster r(type, 1, width, height);
+    Raster r = uninitialised(type, 1, width, height);
     auto v = r.f32();
     std::fill(v.begin(), v.end(), std::numeric_limits<float>::quiet_NaN());
     return r;
   }
-  return Raster(type, 4, width, height);  // zero-initialised: transparent
+  return Raster(type, 4, width, height);  // zero: transparent
 }
 
 std::span<float> Raster::f32() {

@@ -26,9 +26,11 @@ using BorderedTileReader =
 
 // Sets the error of every entry of `indices`: consecutive levels, coarsest
 // first, the finest last (its errors are 0). `shape` is the store's tiles'.
+// `read_interior`, if given, reads a finest tile's interior alone (no
+// border; only the interior is compared), where that is cheaper than `read`.
 Status compute_geometric_errors(std::span<LevelIndex> indices, const TileShape& shape,
                                 const BorderedTileReader& read, Executor& executor,
-                                Progress& progress);
+                                Progress& progress, const BorderedTileReader& read_interior = {});
 
 // The tiles of an open store, and those of a store being written under `root`
 // (no manifest needed).
