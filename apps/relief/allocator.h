@@ -20,6 +20,12 @@ std::string allocator_description();
 // (a build without jemalloc) is also held to two arenas there.
 void fit_allocator_to_budget(uint64_t budget_bytes);
 
+// Hands the pages of freed memory the allocator still holds back to the
+// system now (jemalloc keeps them for seconds; glibc's malloc keeps the free
+// top of its heaps). For a command whose resident memory nears its --memory
+// budget (ingest's MemoryGovernor): those pages count in it.
+void release_freed_memory();
+
 // The same for a long-running server (`relief serve`): its allocations are
 // small and many threads' arenas would each grow in 2 MiB steps, memory a
 // server should give back rather than keep (tests/soak: flat memory over

@@ -156,4 +156,10 @@ void keep_freed_memory() {
   }
 }
 
+void release_freed_memory() {
+  // Every arena at once: MALLCTL_ARENAS_ALL.
+  const std::string name = fmt::format("arena.{}.purge", MALLCTL_ARENAS_ALL);
+  mallctl(name.c_str(), nullptr, nullptr, nullptr, 0);
+}
+
 }  // namespace relief::cli

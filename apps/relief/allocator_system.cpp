@@ -21,4 +21,8 @@ void keep_freed_memory() {
 
 void prefault_in_background(uint64_t) {}
 
+void release_freed_memory() {
+  ::malloc_trim(0);
+}
+
 }  // namespace relief::cli

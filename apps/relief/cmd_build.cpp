@@ -135,6 +135,7 @@ int run_build(const std::vector<std::string>& argv) {
   o.overwrite = args->has("--overwrite");
   o.direct_resampling = !args->has("--gdal-warp");
   o.fill_voids = args->has("--fill-voids");
+  o.release_freed_memory = release_freed_memory;
 
   ThreadExecutor executor(threads->value_or(0));
   auto progress =

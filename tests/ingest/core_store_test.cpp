@@ -74,6 +74,21 @@ TEST(CoreStore, CoresBeyondTheBudgetAreSpilledAndReadBack) {
   EXPECT_EQ(store.spilled(), 6u);
 }
 
+TEST(CoreStore, AShrunkBudgetSpillsWhatNoLongerFitsButKeepsAFloor) {
+  testing::ScratchDir dir("core_store_shrink");
+  CoreStore store(dir / "cores", kShape, 40 * kCoreBytes);
+  for (uint32_t x = 0; x < 20; ++x) ASSERT_TRUE(store.write({5, x, 0}, core_with(2.0f * x)));
+  EXPECT_EQ(store.spilled(), 0u);
+  ASSERT_TRUE(store.shrink_budget(22 * kCoreBytes));  // 18 cores' worth left
+  EXPECT_EQ(store.budget(), 18 * kCoreBytes);
+  EXPECT_EQ(store.spilled(), 2u);
+  ASSERT_TRUE(store.shrink_budget(100 * kCoreBytes));  // never below 16 cores
+  EXPECT_EQ(store.budget(), 16 * kCoreBytes);
+  EXPECT_EQ(store.spilled(), 4u);
+  EXPECT_EQ(regular_files_under(dir / "cores"), 4u);
+  for (uint32_t x = 0; x < 20; ++x) expect_core(store, {5, x, 0}, 2.0f * x);
+}
+
 TEST(CoreStore, AResumedBuildFindsOnlyTheSpilledCores) {
   testing::ScratchDir dir("core_store_resume");
   {

@@ -19,10 +19,12 @@
 
 #include "core_store.h"
 #include "gdal_env.h"
+#include "memory_governor.h"
 #include "output_guard.h"
 #include "pyramid.h"
 #include "relief/base/file_io.h"
 #include "relief/base/first_error.h"
+#include "relief/base/memory_use.h"
 #include "relief/base/units.h"
 #include "relief/tiles/geometric_error.h"
 #include "relief/tiles/store.h"
@@ -370,7 +372,10 @@ class Builder {
         groups_(std::move(groups)),
         cores_(o.output / kBuildDir / "cores",
                {type_, type_ == tiles::SampleType::UInt8 ? 4 : 1, grid.width(), grid.height(), 0},
-               memory.core_cache) {}
+               memory.core_cache),
+        governor_(o.memory_budget,
+                  {resident_set_bytes, o.release_freed_memory,
+                   [this](uint64_t bytes) { return cores_.shrink_budget(bytes); }}) {}
 
   Result<BuildReport> run() {
     const auto start = std::chrono::steady_clock::now();
@@ -402,6 +407,9 @@ class Builder {
     if (o_.kind == tiles::DatasetKind::Elevation) {
       // From the tile files just written: the errors of what readers decode.
       const tiles::TileShape shape = RELIEF_TRY(tiles::tile_shape_of(report.manifest));
+      // The errors' cache of ancestors comes out of the cores' budget.
+      RELIEF_CHECK(cores_.shrink_budget(
+          tiles::ancestor_cache_bytes(shape, indices.size(), ex_.concurrency())));
       RELIEF_CHECK(tiles::compute_geometric_errors(indices, shape, tile_reader(shape), ex_,
                                                    progress_, interior_reader()));
       lap("errors");
@@ -557,6 +565,7 @@ class Builder {
           if (status && --unmade[s] == 0)
             status = mark_done(phase_name(job.key.level), job.key.level);
         }
+        if (status) status = governor_.check();
         if (!status) error.set(status.error());
       }
       progress_.advance();
@@ -639,6 +648,7 @@ class Builder {
   tiles::BorderedTileReader tile_reader(const tiles::TileShape& shape) {
     if (codec_.codec != tiles::Codec::Zstd) return tiles::directory_tile_reader(o_.output, shape);
     return [this](const TileKey& key) -> Result<std::shared_ptr<const tiles::Raster>> {
+      RELIEF_CHECK(governor_.check());
       return std::make_shared<const tiles::Raster>(RELIEF_TRY(bordered_tile(key)));
     };
   }
@@ -647,7 +657,10 @@ class Builder {
   // copied into a bordered tile. Lossless codecs only (see tile_reader).
   tiles::BorderedTileReader interior_reader() {
     if (codec_.codec != tiles::Codec::Zstd) return {};
-    return [this](const TileKey& key) { return cores_.read(key); };
+    return [this](const TileKey& key) -> Result<std::shared_ptr<const tiles::Raster>> {
+      RELIEF_CHECK(governor_.check());
+      return cores_.read(key);
+    };
   }
 
   // Writes one bordered tile unless a valid one is already there.
@@ -720,6 +733,7 @@ class Builder {
   tiles::SampleType type_;
   std::vector<MosaicGroup> groups_;
   CoreStore cores_;
+  MemoryGovernor governor_;
   std::optional<Writeback> writeback_;  // while tiles are written
 };
 

@@ -39,6 +39,10 @@ CoreStore::Victims CoreStore::insert_locked(const geo::TileKey& key,
   used_ += core->byte_size();
   lru_.push_front(key);
   memory_.emplace(key, Entry{std::move(core), on_disk, lru_.begin()});
+  return evict_locked();
+}
+
+CoreStore::Victims CoreStore::evict_locked() {
   Victims victims;
   while (used_ > budget_ && lru_.size() > 1) {
     auto it = memory_.find(lru_.back());
@@ -136,6 +140,22 @@ bool CoreStore::all_on_disk(int level) const {
     if (key.level == level) return false;
   }
   return true;
+}
+
+Status CoreStore::shrink_budget(uint64_t bytes) {
+  const uint64_t floor = 16 * shape_.raster_bytes();
+  Victims victims;
+  {
+    std::lock_guard lock(mutex_);
+    budget_ = budget_ > floor + bytes ? budget_ - bytes : std::min(budget_, floor);
+    victims = evict_locked();
+  }
+  return spill(std::move(victims));
+}
+
+uint64_t CoreStore::budget() const {
+  std::lock_guard lock(mutex_);
+  return budget_;
 }
 
 uint64_t CoreStore::spilled() const {

@@ -42,6 +42,10 @@ class CoreStore {
   bool all_on_disk(int level) const;
   // Cores written to disk so far (by eviction).
   uint64_t spilled() const;
+  // Lowers the memory budget by `bytes` (never below a floor of a few
+  // cores: a task needs nine at once), spilling what no longer fits.
+  Status shrink_budget(uint64_t bytes);
+  uint64_t budget() const;
 
  private:
   struct Entry {
@@ -56,6 +60,9 @@ class CoreStore {
   // memory; those not on disk yet are returned to be written (outside the lock).
   Victims insert_locked(const geo::TileKey& key, std::shared_ptr<const tiles::Raster> core,
                         bool on_disk);
+  // Under mutex_: takes cores beyond the budget out of memory, least recently
+  // used first (the newest always stays).
+  Victims evict_locked();
   Status spill(Victims victims);
 
   std::filesystem::path dir_;

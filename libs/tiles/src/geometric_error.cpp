@@ -181,6 +181,10 @@ float round_up_to_float(double distance) {
   return f;
 }
 
+uint64_t ancestor_cache_bytes(const TileShape& shape, size_t levels, unsigned workers) {
+  return shape.raster_bytes() * levels * (uint64_t{workers} + 1);
+}
+
 Status compute_geometric_errors(std::span<LevelIndex> indices, const TileShape& shape,
                                 const BorderedTileReader& read, Executor& executor,
                                 Progress& progress, const BorderedTileReader& read_interior) {
@@ -199,8 +203,7 @@ Status compute_geometric_errors(std::span<LevelIndex> indices, const TileShape& 
 
   // Workers walk neighbouring finest tiles, which share their ancestors: a
   // few tiles per level and worker are enough for each to be decoded once.
-  const uint64_t budget =
-      shape.raster_bytes() * indices.size() * (uint64_t{executor.concurrency()} + 1);
+  const uint64_t budget = ancestor_cache_bytes(shape, indices.size(), executor.concurrency());
   LruCache<TileKey, Raster, geo::TileKeyHash> ancestors(
       budget, [](const Raster& r) { return r.byte_size(); });
   auto ancestor = [&](const TileKey& key) -> Result<std::shared_ptr<const Raster>> {

@@ -7,6 +7,8 @@
 
 #include <fmt/format.h>
 
+#include "relief/base/memory_use.h"
+
 namespace relief::tiles {
 
 std::string_view to_string(SampleType t) {
@@ -33,6 +35,7 @@ Raster::Raster(Uninitialised, SampleType type, int bands, int width, int height)
     : type_(type), bands_(bands), width_(width), height_(height) {
   assert(width >= 0 && height >= 0 && bands > 0);
   bytes_.resize(pixel_count() * static_cast<size_t>(bands) * sample_size(type));
+  populate_pages(bytes_.data(), bytes_.size());  // a tile's 128 pages in one call
 }
 
 Raster::Raster(SampleType type, int bands, int width, int height)

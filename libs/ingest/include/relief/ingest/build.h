@@ -17,6 +17,7 @@
 // Interiors live in <store>/.build until the build finishes.
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -40,6 +41,9 @@ struct BuildOptions {
   int tile_log2_height = 8;
   int border = 9;
   uint64_t memory_budget = uint64_t{1} << 30;
+  // Hands freed pages the allocator holds back to the system (the program's
+  // allocator knows how): called when the process nears memory_budget.
+  std::function<void()> release_freed_memory;
   bool overwrite = false;
   std::optional<std::string> src_crs;  // for inputs without a CRS
   double warp_error = 0.125;      // approximate-transform error in source pixels (gdalwarp -et)

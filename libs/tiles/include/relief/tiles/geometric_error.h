@@ -32,6 +32,10 @@ Status compute_geometric_errors(std::span<LevelIndex> indices, const TileShape& 
                                 const BorderedTileReader& read, Executor& executor,
                                 Progress& progress, const BorderedTileReader& read_interior = {});
 
+// What compute_geometric_errors keeps of ancestors' tiles in memory, for a
+// caller that budgets it: a few tiles per level and worker.
+uint64_t ancestor_cache_bytes(const TileShape& shape, size_t levels, unsigned workers);
+
 // The tiles of an open store, and those of a store being written under `root`
 // (no manifest needed).
 BorderedTileReader store_tile_reader(const Store& store);
