@@ -5,6 +5,9 @@
 
 #include <fmt/format.h>
 
+#include "relief/base/memory_use.h"
+#include "relief/base/units.h"
+
 namespace relief::cli {
 
 Result<Args> Args::parse(const std::vector<std::string>& argv, const std::vector<OptionSpec>& specs,
@@ -127,6 +130,20 @@ Result<std::vector<double>> parse_numbers(const std::string& option, const std::
     return fail(fmt::format("{}: expected {} comma-separated numbers", option, count));
   }
   return out;
+}
+
+Result<uint64_t> parse_memory_budget(const std::string& text, uint64_t minimum) {
+  auto bytes = parse_byte_size(text);
+  if (!bytes) return fail("--memory: " + bytes.error().message);
+  if (*bytes < minimum) {
+    return fail(fmt::format("--memory: {} is below the least this command needs ({})", text,
+                            format_bytes(minimum)));
+  }
+  if (const uint64_t physical = physical_memory_bytes(); physical && *bytes > physical) {
+    return fail(fmt::format("--memory: {} is more than this machine's memory ({})", text,
+                            format_bytes(physical)));
+  }
+  return *bytes;
 }
 
 }  // namespace relief::cli

@@ -57,4 +57,9 @@ Result<WidthHeight> parse_width_height(const std::string& option, const std::str
 Result<std::vector<double>> parse_numbers(const std::string& option, const std::string& text,
                                           size_t count = 0);
 
+// A --memory budget ("256MiB", "2GiB"): at least `minimum` bytes and no more
+// than the machine has (a budget the machine cannot give would only move
+// the failure to an out-of-memory kill late in the work).
+Result<uint64_t> parse_memory_budget(const std::string& text, uint64_t minimum);
+
 }  // namespace relief::cli

@@ -115,14 +115,9 @@ int run_build(const std::vector<std::string>& argv) {
   if (!border) return fail_on(border.error());
   if (*border) o.border = **border;
   if (auto m = args->get("--memory")) {
-    auto bytes = parse_byte_size(*m);
-    if (!bytes) return report_error("--memory: " + bytes.error().message);
-    // A budget the machine cannot give would only move the failure to an
-    // out-of-memory kill hours into the build.
-    if (const uint64_t physical = physical_memory_bytes(); physical && *bytes > physical) {
-      return report_error(fmt::format("--memory: {} is more than this machine's memory ({})", *m,
-                                      format_bytes(physical)));
-    }
+    // The least a build can do with is checked against its thread count later.
+    auto bytes = parse_memory_budget(*m, 0);
+    if (!bytes) return report_error(bytes.error().message);
     o.memory_budget = *bytes;
     fit_allocator_to_budget(*bytes);
   }

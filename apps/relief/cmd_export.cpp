@@ -3,6 +3,7 @@
 
 #include <fmt/format.h>
 
+#include "allocator.h"
 #include "args.h"
 #include "commands.h"
 #include "output_safety.h"
@@ -12,10 +13,12 @@ namespace relief::cli {
 
 namespace {
 constexpr const char* kExportHelp =
-    R"(usage: relief export STORE --level L [--bbox W,S,E,N] -o OUT.tif
+    R"(usage: relief export STORE --level L [--bbox W,S,E,N] [--memory SIZE] -o OUT.tif
 
 Reassembles tile interiors of one level into a GeoTIFF (EPSG:4326, the store's
 sample grid; NaN or alpha marks nodata). The box is snapped outwards to samples.
+--memory bounds the whole process (default 256MiB, at least 96MiB), whatever
+the size of the output.
 )";
 
 Result<geo::GeoBox> parse_bbox(const std::string& text) {
@@ -35,7 +38,8 @@ Result<geo::GeoBox> parse_bbox(const std::string& text) {
 int run_export(const std::vector<std::string>& argv) {
   if (wants_help(argv)) return print_help(kExportHelp);
   auto args = Args::parse(
-      argv, {{"--level"}, {"--bbox"}, {"--output", "-o"}, {"--quiet", "-q", false}}, "export");
+      argv, {{"--level"}, {"--bbox"}, {"--memory"}, {"--output", "-o"}, {"--quiet", "-q", false}},
+      "export");
   if (!args) return report_error(args.error().message);
   if (args->positional().size() != 1) return report_error("export: expected exactly one STORE");
   ingest::ExportOptions o;
@@ -48,6 +52,12 @@ int run_export(const std::vector<std::string>& argv) {
     auto box = parse_bbox(*b);
     if (!box) return report_error(box.error().message);
     o.bbox = *box;
+  }
+  if (auto m = args->get("--memory")) {
+    auto bytes = parse_memory_budget(*m, ingest::kExportMinimumBudget);
+    if (!bytes) return report_error(bytes.error().message);
+    o.memory_budget = *bytes;
+    fit_allocator_to_budget(*bytes);
   }
   if (!args->get("--output")) return report_error("export: -o OUT.tif is required");
   o.output = *args->get("--output");

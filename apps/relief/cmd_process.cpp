@@ -91,10 +91,8 @@ int run_process(const std::vector<std::string>& argv) {
   o.params = params;
   if (auto c = args->get("--compress")) o.compress = *c;
   if (auto m = args->get("--memory")) {
-    auto bytes = parse_byte_size(*m);
-    if (!bytes) return report_error("--memory: " + bytes.error().message);
-    if (*bytes < (uint64_t{16} << 20))
-      return report_error("--memory: the budget must be at least 16 MiB");
+    auto bytes = parse_memory_budget(*m, uint64_t{16} << 20);
+    if (!bytes) return report_error(bytes.error().message);
     o.memory_budget = *bytes;
     fit_allocator_to_budget(*bytes);
   }

@@ -11,6 +11,7 @@
 
 #include "gdal_env.h"
 #include "relief/base/file_io.h"
+#include "relief/base/units.h"
 #include "relief/tiles/store.h"
 
 namespace relief::ingest {
@@ -49,7 +50,14 @@ Result<ExportReport> export_geotiff(const ExportOptions& o, Progress& progress) 
                     width, height, o.level));
   }
 
+  if (o.memory_budget < kExportMinimumBudget) {
+    return fail(fmt::format("--memory: {} is below the least an export needs ({})",
+                            format_bytes(o.memory_budget), format_bytes(kExportMinimumBudget)));
+  }
   init_gdal();
+  // Blocks are written row of tiles by row of tiles: a full cache flushes the
+  // oldest, which are complete.
+  GDALSetCacheMax64(static_cast<GIntBig>(o.memory_budget - export_reserve(o.memory_budget)));
   const bool imagery = m.sample_type == tiles::SampleType::UInt8;
   const int bands = imagery ? 4 : 1;
   static_cast<void>(remove_stale_temporaries_of(o.output));  // of killed runs
@@ -71,9 +79,11 @@ Result<ExportReport> export_geotiff(const ExportOptions& o, Progress& progress) 
   GDALSetGeoTransform(out.get(), gt);
   GDALSetProjection(out.get(), kWgs84Wkt);
   if (!imagery) {
+    // Blocks no tile writes are filled with the nodata value when the file is
+    // closed (GTiff's empty blocks): no fill of the whole raster beforehand,
+    // which wrote every block twice and held them all in the cache.
     GDALSetRasterNoDataValue(GDALGetRasterBand(out.get(), 1),
                              std::numeric_limits<double>::quiet_NaN());
-    GDALFillRaster(GDALGetRasterBand(out.get(), 1), std::numeric_limits<double>::quiet_NaN(), 0);
   }
   auto discard = [&](Error e) -> Result<ExportReport> {
     out.reset();
