@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <cstdio>
 #include <sstream>
 
@@ -8,6 +9,7 @@
 #include "commands.h"
 #include "output_safety.h"
 #include "relief/ingest/export.h"
+#include "relief/tiles/store.h"
 
 namespace relief::cli {
 
@@ -52,6 +54,12 @@ int run_export(const std::vector<std::string>& argv) {
     auto box = parse_bbox(*b);
     if (!box) return report_error(box.error().message);
     o.bbox = *box;
+  } else if (auto store = tiles::Store::open(o.store)) {
+    // The extent may reach half a sample past the antimeridian (a grid of
+    // 0..360 wrapped): the export covers its part of the globe.
+    const geo::GeoBox& e = store->manifest().extent;
+    o.bbox = geo::GeoBox{std::max(e.west, -180.0), std::max(e.south, -90.0),
+                         std::min(e.east, 180.0), std::min(e.north, 90.0)};
   }
   if (auto m = args->get("--memory")) {
     auto bytes = parse_memory_budget(*m, ingest::kExportMinimumBudget);
@@ -68,7 +76,16 @@ int run_export(const std::vector<std::string>& argv) {
   auto progress =
       args->has("--quiet") ? std::make_unique<NullProgress>() : make_progress_for_stderr();
   auto report = ingest::export_geotiff(o, *progress);
-  if (!report) return report_error(report.error().message);
+  if (!report) {
+    // Without --bbox the box is the store's extent: say so, not "--bbox".
+    const std::string_view option = "--bbox: ";
+    std::string message = report.error().message;
+    if (!args->get("--bbox") && message.starts_with(option)) {
+      message = fmt::format("{}: the store's extent, exported without --bbox, {}", o.store.string(),
+                            message.substr(option.size()));
+    }
+    return report_error(message);
+  }
   std::printf("wrote %s: %d x %d samples from %d tiles\n", o.output.c_str(), report->width,
               report->height, report->tiles_read);
   return 0;

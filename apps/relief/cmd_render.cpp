@@ -79,7 +79,8 @@ options:
                      over the Pyrenees; 0: not measured)
   --gpu-budget SIZE  GPU texture cache (L3) budget (default 1GiB)
   --cache DIR        for a store given as http:// URL(s): keep fetched files under DIR
-  --cache-size SIZE  budget of that disk cache (L1, default 1GiB)
+  --cache-size SIZE  budget of that disk cache (L1, default 1GiB; a file larger than
+                     it is not kept: 0 keeps nothing)
   --loader-nice N    run the tile loaders N nice levels below the render thread
                      (0-19, default 0; docs/streaming.md "In flight")
   --refine-threads N threads that refine a frame's edge marks (the same mesh;
@@ -173,8 +174,10 @@ int render_still(const Args& args, RenderSetup& setup) {
     auto ground = store->sample(camera->lon, camera->lat, store->manifest().max_level);
     if (!ground) return report_error(ground.error().message);
     if (*ground && camera->height < **ground) {
-      return report_error(fmt::format("--camera: {:.1f} m is below the ground ({:.1f} m) at {},{}",
-                                      camera->height, **ground, camera->lon, camera->lat));
+      return report_error(
+          fmt::format("{}: the camera at {:.1f} m is below the ground ({:.1f} m) at {},{}",
+                      args.get("--camera") ? "--camera" : "--look-at", camera->height, **ground,
+                      camera->lon, camera->lat));
     }
   }
 

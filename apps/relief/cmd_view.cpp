@@ -182,6 +182,10 @@ Result<window::ViewerOptions> viewer_options(const Args& args, const RenderSetup
     o.start = RELIEF_TRY(parse_camera(args, setup));
   } else {
     o.start = default_camera(setup);
+    if (auto view = lod::make_view(o.start); !view) {
+      return fail(fmt::format("the default camera, over the store's whole extent: {}",
+                              view.error().message));
+    }
   }
   if (auto play = args.get("--play")) {
     view::PathFile path = RELIEF_TRY(view::read_path_file(
@@ -399,7 +403,10 @@ int view_session(const Args& args, RenderSetup& setup) {
   std::printf("%zu frames in %.1f s: frame time p50 %.1f ms, p99 %.1f ms; last frame %s\n",
               summary->frames, summary->seconds, summary->p50_frame_ms, summary->p99_frame_ms,
               summary->complete ? "complete" : "NOT complete");
-  return 0;
+  // A session that went without some tiles did not show the store: each is
+  // named, and the exit status says so (as `relief render` fails on one).
+  for (const std::string& error : summary->unreadable_tiles) report_error(error);
+  return summary->unreadable_tiles.empty() ? 0 : 1;
 }
 
 }  // namespace

@@ -1,5 +1,6 @@
 #include "render_parallel.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <csignal>
@@ -110,6 +111,11 @@ class Run {
       setup->height = wall->virtual_height();
       wall_ = *wall;
     }
+    if (mode_.kind == ParallelMode::Kind::sort_first) {
+      if (auto st = check_screen_tiles(setup->width, setup->height); !st) {
+        return same_everywhere(st.error().message);
+      }
+    }
     const bool path = args_.get("--path").has_value();
     if (!path && !args_.get("--camera") == !args_.get("--look-at")) {
       return same_everywhere("render: give exactly one of --camera and --look-at");
@@ -211,6 +217,18 @@ class Run {
     return display >= 0 ? display_file(out, wall_, display) : out;
   }
 
+  // Sort-first gives each rank a screen tile of at least one pixel.
+  Status check_screen_tiles(int width, int height) const {
+    const auto tiles = parallel::screen_tiles(width, height, mode_.screen, comm_.size());
+    if (std::none_of(tiles.begin(), tiles.end(),
+                     [](const lod::PixelRect& t) { return t.empty(); })) {
+      return {};
+    }
+    return fail(fmt::format(
+        "--parallel {}: a {}x{} view has too few pixels to give each of the {} ranks a screen "
+        "tile; give a larger --size or fewer ranks",
+        parallel::to_string(mode_), width, height, comm_.size()));
+  }
   int same_everywhere(const std::string& message) {
     return comm_.rank() == 0 ? report_error(message) : 1;
   }

@@ -282,15 +282,23 @@ Result<lod::Camera> camera_from_values(const std::string& where, const std::vect
 }
 
 Result<lod::Camera> parse_camera(const Args& args, const RenderSetup& s) {
+  lod::Camera camera;
+  const char* option = args.get("--camera") ? "--camera" : "--look-at";
   if (auto c = args.get("--camera")) {
-    return camera_from_values("--camera", RELIEF_TRY(parse_numbers("--camera", *c, 6)), s);
+    const std::vector<double> values = RELIEF_TRY(parse_numbers("--camera", *c, 6));
+    camera = RELIEF_TRY(camera_from_values("--camera", values, s));
+  } else {
+    auto v = RELIEF_TRY(parse_numbers("--look-at", *args.get("--look-at"), 6));
+    // Targets as deep as the ocean floor (bathymetry), seen from any positive range.
+    const Bound height{"height (m)", -12000, kFarthest}, range{"range (m)", 0, kFarthest, true};
+    RELIEF_CHECK(check_bounds("--look-at", v, {kLon, kLat, height, range, kHeading, kPitch}));
+    camera = lod::look_at(normalized_longitude(v[0]), v[1], v[2], v[3], v[4], v[5], s.fov, s.width,
+                          s.height);
   }
-  auto v = RELIEF_TRY(parse_numbers("--look-at", *args.get("--look-at"), 6));
-  // Targets as deep as the ocean floor (bathymetry), seen from any positive range.
-  const Bound height{"height (m)", -12000, kFarthest}, range{"range (m)", 0, kFarthest, true};
-  RELIEF_CHECK(check_bounds("--look-at", v, {kLon, kLat, height, range, kHeading, kPitch}));
-  return lod::look_at(normalized_longitude(v[0]), v[1], v[2], v[3], v[4], v[5], s.fov, s.width,
-                      s.height);
+  if (auto view = lod::make_view(camera); !view) {
+    return fail(fmt::format("{}: {}", option, view.error().message));
+  }
+  return camera;
 }
 
 Result<std::optional<int>> error_samples(const Args& args) {

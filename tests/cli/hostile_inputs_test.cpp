@@ -2,13 +2,16 @@
 // /dev/zero), files far larger than they should be, numbers that wrap, paths
 // that would wait for years. Each is a one-line error naming the file or
 // option, a non-zero exit, and no hang (`timeout` turns one into exit 124).
+#include <signal.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
 
 #include "relief/base/file_io.h"
+#include "servers.h"
 #include "test_support.h"
 
 namespace relief::testing {
@@ -180,6 +183,49 @@ TEST_F(HostileInputs, SplitSharesOnlyTheStoresOwnFiles) {
   std::ofstream(tile).put('x');
   fs::resize_file(tile, uint64_t{1} << 30);
   split("1073741824 bytes, not the");
+}
+
+// Issue 42 item 6: messages name what the user gave. A --look-at whose eye
+// ends below the ground or inside the ellipsoid is --look-at's error.
+TEST_F(HostileInputs, ACameraFromLookAtIsNotBlamedOnCamera) {
+  expect_refused(render({"--look-at", "1.5,42.5,0,100,0,-30", "--size", "64x48"}),
+                 {"--look-at: the camera at", "is below the ground"});
+  expect_refused(render({"--look-at", "1.5,42.5,-12000,5000,0,-10", "--size", "64x48"}),
+                 {"--look-at: the camera's height", "inside the ellipsoid"});
+  const RunResult r =
+      run_relief(render({"--look-at", "1.5,42.5,0,100,0,-30", "--size", "64x48"}), kBounded);
+  EXPECT_EQ(r.err.find("--camera"), std::string::npos) << r.err;
+}
+
+// The disk cache of a remote store: its budget holds for every file (0
+// keeps nothing, not the last tile), and a directory it cannot write in
+// (/proc/self) is a one-line error naming it, not an internal error.
+TEST_F(HostileInputs, TheDiskCacheKeepsItsBudgetAndRefusesUnwritableDirectories) {
+  const int port = free_port();
+  const int pid = spawn_relief({"serve", store().string(), "--port", std::to_string(port)});
+  wait_for(port);
+  const std::string url = "http://127.0.0.1:" + std::to_string(port);
+  auto remote = [&](const std::string& cache, const std::string& size) {
+    return std::vector<std::string>{"render",  url,     "--look-at",    "1.5,42.5,0,20000,0,-30",
+                                    "--size",  "64x48", "-o",           at("remote.png").string(),
+                                    "--cache", cache,   "--cache-size", size};
+  };
+  const RunResult zero =
+      run_relief(remote(at("cache0").string(), "0"), kNoMesaLeakReport + kBounded);
+  EXPECT_EQ(zero.exit_code, 0) << zero.err;
+  EXPECT_EQ(regular_files_under(at("cache0")), 0u);
+  const RunResult small =
+      run_relief(remote(at("cache1").string(), "100K"), kNoMesaLeakReport + kBounded);
+  EXPECT_EQ(small.exit_code, 0) << small.err;
+  uint64_t bytes = 0;
+  for (const auto& e : fs::recursive_directory_iterator(at("cache1"))) {
+    if (e.is_regular_file()) bytes += e.file_size();
+  }
+  EXPECT_LE(bytes, uint64_t{100} << 10);
+  expect_refused(remote("/proc/self", "1M"),
+                 {"/proc/self: not a directory the disk cache can write in"});
+  ::kill(pid, SIGTERM);
+  ::waitpid(pid, nullptr, 0);
 }
 
 }  // namespace

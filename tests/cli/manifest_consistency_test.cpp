@@ -3,11 +3,16 @@
 // count the tiles' samples) fails verify, and the store reader refuses it.
 #include <gtest/gtest.h>
 
+#include <array>
+#include <cmath>
+#include <cstring>
 #include <fstream>
 #include <functional>
+#include <span>
 
 #include <nlohmann/json.hpp>
 
+#include "relief/tiles/tile_file.h"
 #include "test_support.h"
 
 namespace relief::testing {
@@ -72,6 +77,15 @@ TEST_F(ManifestConsistency, ContradictoryFieldsAreRefused) {
       {"max_error", [](json& m) { m["codec"]["max_error"] = -1; }, "max_error -1"},
       {"extent", [](json& m) { std::swap(m["extent"]["west"], m["extent"]["east"]); }, "extent"},
       {"stats", [](json& m) { m["statistics"]["min"] = 5000; }, "statistics min 5000"},
+      // Issue 42 item 6: what the probe's manifests got through.
+      {"registration", [](json& m) { m["tile"]["registration"] = "grid-point"; },
+       "tile registration 'grid-point' is not cell-centre"},
+      {"nodata", [](json& m) { m["nodata"] = "alpha=0"; }, "nodata 'alpha=0' is not float32"},
+      {"extent_1e308", [](json& m) { m["extent"]["east"] = 1e308; }, "E 1e+308"},
+      {"extent_empty", [](json& m) { m["extent"]["east"] = m["extent"]["west"]; },
+       "is not west < east"},
+      {"extent_pole", [](json& m) { m["extent"]["north"] = 95; }, "N 95 is not"},
+      {"stats_huge", [](json& m) { m["statistics"]["max"] = 1e308; }, "max 1e+308 mean 1372"},
   };
   for (const auto& c : cases) {
     const std::string store = tampered(c.name, c.edit);
@@ -87,6 +101,72 @@ TEST_F(ManifestConsistency, StatisticsMustCountTheFinestTiles) {
   const auto r = run_relief({"verify", store, "-q"});
   EXPECT_TRUE(is_one_line_error(r, "statistics count")) << r.err;
   EXPECT_EQ(run_relief({"verify", (dir_->path() / "good").string(), "-q"}).exit_code, 0);
+}
+
+// The manifest agrees with itself but not with the tiles: one line naming
+// the manifest, not one per tile.
+TEST_F(ManifestConsistency, AManifestThatContradictsTheTilesFailsVerify) {
+  struct Case {
+    const char* name;
+    std::function<void(json&)> edit;
+    const char* needle;
+  };
+  const Case cases[] = {
+      {"lerc", [](json& m) { m["codec"]["name"] = "lerc"; }, "codec lerc contradicts"},
+      {"elsewhere",
+       [](json& m) {
+         m["extent"]["west"] = 100;
+         m["extent"]["east"] = 101;
+       },
+       "extent W 100 S"},
+      {"max_above", [](json& m) { m["statistics"]["max"] = 3100; },
+       "statistics min 349.7852783203125 max 3100 are outside the finest level's samples"},
+  };
+  for (const auto& c : cases) {
+    const std::string store = tampered(c.name, c.edit);
+    const auto r = run_relief({"verify", store, "-q"});
+    EXPECT_TRUE(is_one_line_error(r, store + "/manifest.json: " + c.needle))
+        << c.name << ": " << r.err;
+  }
+}
+
+// A tile header whose statistics are NaN, infinite or contradict each other
+// (checksum recomputed) is refused by every reader, naming the tile.
+TEST_F(ManifestConsistency, TileStatisticsThatAreNotNumbersAreRefused) {
+  const std::pair<size_t, double> cases[] = {{24, NAN}, {32, INFINITY}, {24, -INFINITY},
+                                             {40, NAN}, {40, 1e300},    {48, INFINITY}};
+  for (const auto& [offset, value] : cases) {
+    const std::string store = tampered("tile_stats", [](json&) {});
+    fs::path tile;
+    for (const auto& e : fs::recursive_directory_iterator(store)) {
+      if (e.path().extension() == ".rtile" && (tile.empty() || e.path() < tile)) tile = e.path();
+    }
+    std::fstream f(tile, std::ios::in | std::ios::out | std::ios::binary);
+    std::array<char, 80> header{};
+    f.read(header.data(), header.size());
+    std::memcpy(header.data() + offset, &value, sizeof value);
+    const uint32_t crc =
+        tiles::crc32_of(std::as_bytes(std::span<const char>(header.data(), size_t{76})));
+    std::memcpy(header.data() + 76, &crc, sizeof crc);
+    f.seekp(0);
+    f.write(header.data(), header.size());
+    f.close();
+    const auto r = run_relief({"verify", store, "-q"});
+    EXPECT_TRUE(is_one_line_error(r, tile.string() + ": tile header statistics"))
+        << offset << " " << value << ": " << r.err;
+  }
+}
+
+// Without --bbox the box is the store's extent: an error names it, not --bbox.
+TEST_F(ManifestConsistency, ExportWithoutBboxBlamesTheExtentNotTheOption) {
+  const std::string store = tampered("wide", [](json& m) {
+    m["extent"] = {{"west", -170}, {"south", -80}, {"east", 170}, {"north", 80}};
+  });
+  const auto r = run_relief(
+      {"export", store, "--level", "10", "-o", (dir_->path() / "wide.tif").string(), "-q"});
+  EXPECT_TRUE(is_one_line_error(r, store + ": the store's extent, exported without --bbox"))
+      << r.err;
+  EXPECT_EQ(r.err.find("--bbox:"), std::string::npos) << r.err;
 }
 
 }  // namespace

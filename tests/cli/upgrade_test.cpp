@@ -135,6 +135,32 @@ TEST_F(Upgrade, OldIndicesUnderACurrentManifestAreUpgradedToo) {
   EXPECT_EQ(metadata(old), metadata(store()));
 }
 
+// A version-1 index that is also damaged (its count disagrees with its
+// records, checksum recomputed) under a current manifest: readers used to
+// send the user to `relief upgrade`, which then said "nothing to do". Both
+// now name the damage, and neither succeeds.
+TEST_F(Upgrade, ADamagedOldIndexIsTheSameErrorToReadersAndUpgrade) {
+  const fs::path old = dir_ / "damaged";
+  fs::copy(store(), old, fs::copy_options::recursive);
+  const fs::path index = old / tiles::level_index_relative_path(8);
+  std::vector<std::byte> bytes = as_version1(bytes_of(index));
+  uint64_t count = 0;
+  std::memcpy(&count, bytes.data() + 28, 8);
+  ++count;
+  std::memcpy(bytes.data() + 28, &count, 8);
+  bytes.resize(bytes.size() - 4);
+  const uint32_t crc = tiles::crc32_of(bytes);
+  const auto* c = reinterpret_cast<const std::byte*>(&crc);
+  bytes.insert(bytes.end(), c, c + 4);
+  ASSERT_TRUE(write_file_atomic(index, bytes));
+  const std::string damage = index.string() + ": level index is truncated or inconsistent";
+  auto info = run_relief({"info", old.string()});
+  EXPECT_TRUE(is_one_line_error(info, damage)) << info.err;
+  auto r = run_relief({"upgrade", old.string(), "-q"});
+  EXPECT_TRUE(is_one_line_error(r, damage)) << r.out << r.err;
+  EXPECT_EQ(r.out.find("nothing to do"), std::string::npos) << r.out;
+}
+
 // Imagery has no heights: errors 0, only the format changes.
 TEST_F(Upgrade, ImageryStoresOnlyChangeFormat) {
   const fs::path fresh = dir_ / "rgb";

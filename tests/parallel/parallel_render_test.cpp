@@ -271,6 +271,27 @@ TEST(Parallel, AWallWithBezelsShowsEachDisplaysPartOfTheVirtualView) {
   EXPECT_NE(three.err.find("has 4 displays for 3 ranks"), std::string::npos) << three.err;
 }
 
+// Sort-first gives each rank a screen tile: a view with fewer rows (h) or
+// columns (v) than ranks is a one-line error before anything is drawn, not
+// a rank's internal "window 1x0+0+0 is not inside the view" (issue 42).
+TEST(Parallel, ASortFirstViewTooSmallForItsRanksIsAOneLineError) {
+  ScratchDir dir("parallel_too_small");
+  const fs::path out = dir / "out.png";
+  for (const char* mode : {"sort-first:v", "sort-first:h", "sort-first:grid"}) {
+    std::vector<std::string> a = render_args(out, 1, 1);
+    a.insert(a.end(), {"--parallel", mode});
+    auto r = run_relief(a, mpirun(2));
+    EXPECT_NE(r.exit_code, 0) << mode;
+    EXPECT_NE(r.err.find(fmt::format("relief: --parallel {}: a 1x1 view has too few pixels to "
+                                     "give each of the 2 ranks a screen tile",
+                                     mode)),
+              std::string::npos)
+        << r.err;
+    EXPECT_EQ(r.err.find("is not inside"), std::string::npos) << r.err;
+  }
+  EXPECT_FALSE(fs::exists(out));
+}
+
 // A rank that dies, or stops answering, fails the run with a message
 // instead of a hang (the test's own timeout would catch a hang).
 TEST(Parallel, ARankThatHangsFailsTheRunWithinTheTimeout) {

@@ -157,7 +157,7 @@ geo::TileKey one_tile_store(const fs::path& root, const std::vector<std::byte>& 
   index.add(entry);
   EXPECT_TRUE(write_level_index(root, index));
   Manifest m;
-  m.stats.valid_count = entry.valid_count;  // verify checks the statistics against the index
+  m.stats = h.stats;  // verify checks the statistics against the index
   m.tile_log2_height = 5;
   m.border = 8;
   m.extent = {-180, -90, 180, 90};

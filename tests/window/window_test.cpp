@@ -972,6 +972,37 @@ TEST(ViewCommand, ASarLayerWithHintsAndNoElevationStore) {
             20u);
 }
 
+// A corrupt tile the view needs: the session goes on without it, then names
+// the tile and the problem on stderr and exits non-zero (issue 42 item 6:
+// it ended with 0 and said nothing), as `relief render` fails on it.
+TEST(ViewCommand, ACorruptTileIsNamedAndTheSessionFails) {
+  ScratchDir dir("view_corrupt_tile");
+  const std::filesystem::path store = dir / "store";
+  ASSERT_EQ(run_relief({"build", testing::data("srtm/N42E001.hgt.zip"), "--kind", "elevation", "-o",
+                        store.string(), "-q"})
+                .exit_code,
+            0);
+  // The finest tile under the target, its payload overwritten in the middle.
+  auto opened = tiles::Store::open(store);
+  ASSERT_TRUE(opened) << opened.error().message;
+  const geo::TileKey key = opened->grid().locate(opened->manifest().max_level, 1.5, 42.5).tile;
+  ASSERT_TRUE(opened->has_tile(key)) << key.to_string();
+  const std::filesystem::path tile = opened->tile_path(key);
+  {
+    std::fstream f(tile, std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(200);
+    f.write("garbage", 7);
+  }
+  const std::string size = fmt::format("{}x{}", kWidth, kHeight);
+  auto r = run_relief({"view", store.string(), "--look-at", "1.5,42.5,1000,5000,0,-60", "--size",
+                       size, "--exit-when-done", "--until-complete", "3", "--no-vsync"},
+                      kNoMesaLeakReport);
+  EXPECT_NE(r.exit_code, 0) << r.out << r.err;
+  EXPECT_NE(r.out.find("frames in"), std::string::npos) << r.out;
+  EXPECT_TRUE(testing::is_one_line_error(r, tile.string() + ": tile payload checksum mismatch"))
+      << r.err;
+}
+
 TEST(ViewCommand, BadInputIsAOneLineError) {
   ScratchDir dir("view_bad");
   const std::string store = store_path();

@@ -74,18 +74,18 @@ bool View::project(const Vec3& p, double& sx, double& sy) const {
 
 Result<View> make_view(const Camera& c) {
   if (!(c.width >= 1 && c.height_px >= 1 && c.width <= 16384 && c.height_px <= 16384)) {
-    return fail(
-        fmt::format("--size: {}x{} is not between 1x1 and 16384x16384", c.width, c.height_px));
+    return fail(fmt::format("the view's size {}x{} is not between 1x1 and 16384x16384", c.width,
+                            c.height_px));
   }
   if (!(c.fov_y > 1 && c.fov_y < 170)) {
-    return fail(fmt::format("--fov: {} degrees is not in (1, 170)", c.fov_y));
+    return fail(fmt::format("the field of view of {} degrees is not in (1, 170)", c.fov_y));
   }
   if (!(c.lat >= -90 && c.lat <= 90) || !(c.lon >= -360 && c.lon <= 360) ||
       !std::isfinite(c.height)) {
-    return fail(fmt::format("--camera: {},{} is not a longitude, latitude", c.lon, c.lat));
+    return fail(fmt::format("the camera's {},{} is not a longitude, latitude", c.lon, c.lat));
   }
   if (c.height <= -1000) {
-    return fail(fmt::format("--camera: height {} m is inside the ellipsoid", c.height));
+    return fail(fmt::format("the camera's height {} m is inside the ellipsoid", c.height));
   }
   View v;
   v.eye = ecef(c.lon, c.lat, c.height);

@@ -1,7 +1,11 @@
 #include "relief/net/disk_cache.h"
 
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <condition_variable>
+#include <cstring>
 #include <list>
 #include <map>
 #include <mutex>
@@ -29,6 +33,12 @@ uint64_t stable_hash(std::string_view bytes) {
     h *= 0x100000001b3ULL;
   }
   return h;
+}
+// The names of the cache's location directories: 16 hex digits.
+bool is_location_name(std::string_view name) {
+  return name.size() == 16 && std::all_of(name.begin(), name.end(), [](char c) {
+           return (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f');
+         });
 }
 std::string as_text(std::span<const std::byte> bytes) {
   return {reinterpret_cast<const char*>(bytes.data()), bytes.size()};
@@ -74,29 +84,38 @@ class Cache final : public DiskCache {
   // Keeps the manifest beside the store's files, for offline runs.
   void keep_manifest() {
     const std::string key = (store_rel_ / tiles::kManifestName).generic_string();
-    if (write_file_atomic(dir_ / key, manifest_)) {
+    if (manifest_.size() <= budget_ && write_file_atomic(dir_ / key, manifest_)) {
       std::lock_guard lock(mutex_);
       add_locked(key, manifest_.size());
     }
   }
 
-  // Existing files, oldest first, become the initial LRU order.
+  // Existing files, oldest first, become the initial LRU order. Only those
+  // under the cache's own location directories count (and may be evicted):
+  // a cache directory shared with anything else keeps the rest.
   void load_existing() {
     std::vector<std::pair<fs::file_time_type, fs::path>> files;
     std::error_code ec;
-    for (auto it = fs::recursive_directory_iterator(dir_, ec);
-         it != fs::recursive_directory_iterator(); it.increment(ec)) {
-      if (ec) break;
-      if (!it->is_regular_file() ||
-          it->path().filename().string().find(kTempMarker) != std::string::npos) {
-        continue;
+    for (auto top = fs::directory_iterator(dir_, ec); !ec && top != fs::directory_iterator();
+         top.increment(ec)) {
+      if (!is_location_name(top->path().filename().string()) || !top->is_directory(ec)) continue;
+      std::error_code walk;
+      for (auto it = fs::recursive_directory_iterator(top->path(), walk);
+           !walk && it != fs::recursive_directory_iterator(); it.increment(walk)) {
+        std::error_code entry;
+        if (!it->is_regular_file(entry) ||
+            it->path().filename().string().find(kTempMarker) != std::string::npos) {
+          continue;
+        }
+        const auto time = it->last_write_time(entry);
+        if (!entry) files.emplace_back(time, it->path());
       }
-      files.emplace_back(it->last_write_time(), it->path());
     }
     std::sort(files.begin(), files.end());
     for (const auto& [time, path] : files) {
-      const std::string rel = fs::relative(path, dir_).generic_string();
+      const std::string rel = path.lexically_relative(dir_).generic_string();
       const uint64_t size = fs::file_size(path, ec);
+      if (ec) continue;
       order_.push_front(rel);
       entries_[rel] = {size, order_.begin()};
       bytes_ += size;
@@ -142,7 +161,8 @@ class Cache final : public DiskCache {
     ++misses_;
     lock.unlock();
     Result<std::vector<std::byte>> result = upstream_->fetch(rel);
-    if (result && write_file_atomic(dir_ / key, *result)) {
+    // A file larger than the whole budget is not kept (a budget of 0 keeps nothing).
+    if (result && result->size() <= budget_ && write_file_atomic(dir_ / key, *result)) {
       std::lock_guard relock(mutex_);
       add_locked(key, result->size());
     }
@@ -186,7 +206,7 @@ class Cache final : public DiskCache {
   }
 
   void evict_locked() const {
-    while (bytes_ > budget_ && order_.size() > 1) {
+    while (bytes_ > budget_ && !order_.empty()) {
       drop_locked(order_.back());
       ++evictions_;
     }
@@ -213,7 +233,8 @@ Result<std::shared_ptr<DiskCache>> DiskCache::create(
   std::error_code ec;
   fs::create_directories(directory, ec);
   if (!fs::is_directory(directory, ec)) {
-    return fail(fmt::format("{}: cannot create the cache directory", directory.string()));
+    return fail(fmt::format("{}: cannot create the cache directory{}", directory.string(),
+                            ec ? ": " + ec.message() : std::string()));
   }
   // Keyed by the store's identity, its location and its manifest (fetched
   // anew every time): two stores, or a store rebuilt at the same URL, never
@@ -230,6 +251,16 @@ Result<std::shared_ptr<DiskCache>> DiskCache::create(
     manifest = std::move(cached->second);
   } else {
     return std::unexpected(fresh.error());
+  }
+  // Where this store's files go must be a directory the cache can write in
+  // (not /proc, a read-only mount or a file in the way).
+  fs::create_directories(directory / store_rel, ec);
+  if (ec || !fs::is_directory(directory / store_rel, ec) ||
+      ::access((directory / store_rel).c_str(), W_OK | X_OK) != 0) {
+    return fail(
+        fmt::format("{}: not a directory the disk cache can write in (creating {} in it: {})",
+                    directory.string(), store_rel.parent_path().string(),
+                    ec ? ec.message() : std::string(std::strerror(errno))));
   }
   auto cache = std::make_shared<Cache>(std::move(upstream), directory, budget_bytes,
                                        std::move(store_rel), std::move(manifest));

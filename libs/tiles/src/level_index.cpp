@@ -156,7 +156,6 @@ Result<LevelIndex> LevelIndex::parse_any(std::span<const std::byte> b, const std
     return fail(fmt::format("{}: level index checksum mismatch", name));
   }
   const auto version = read_at<uint16_t>(b, 8);
-  if (version == 1 && !accept_version1) return fail(predates_geometric_errors(name));
   if (version != kVersion && version != 1) {
     return fail(fmt::format("{}: unsupported level index version {}", name, version));
   }
@@ -201,6 +200,9 @@ Result<LevelIndex> LevelIndex::parse_any(std::span<const std::byte> b, const std
   if (index.entries_.size() != count) {
     return fail(fmt::format("{}: level index bitmap and records disagree", name));
   }
+  // Only an index `relief upgrade` can read sends the user there: a damaged
+  // one is an error of its own.
+  if (version == 1 && !accept_version1) return fail(predates_geometric_errors(name));
   return index;
 }
 

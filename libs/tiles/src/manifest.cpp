@@ -151,6 +151,12 @@ Result<Manifest> Manifest::from_json(const std::string& text, const std::string&
       return fail(fmt::format("{}: bad tile border {}", name, m.border));
     }
     m.tile_log2_height = log2;
+    // Samples are cell-centred (docs/store-format.md): a reader of another
+    // registration would place every sample half a sample off.
+    if (const auto registration = j.at("tile").at("registration").get<std::string>();
+        registration != "cell-centre") {
+      return fail(fmt::format("{}: tile registration '{}' is not cell-centre", name, registration));
+    }
     m.min_level = integer_at<int>(j.at("levels"), "min");
     m.max_level = integer_at<int>(j.at("levels"), "max");
     if (m.min_level < 0 || m.max_level > geo::kMaxLevel || m.min_level > m.max_level) {
@@ -176,6 +182,10 @@ Result<Manifest> Manifest::from_json(const std::string& text, const std::string&
     m.created_by = j.value("created_by", "");
     m.sparse_depth = j.value("sparse_depth", false);
     RELIEF_CHECK(check_consistency(m, name));
+    if (const auto nodata = j.at("nodata").get<std::string>(); nodata != m.nodata_description()) {
+      return fail(fmt::format("{}: nodata '{}' is not {} samples' '{}'", name, nodata,
+                              to_string(m.sample_type), m.nodata_description()));
+    }
     return m;
   } catch (const json::exception& ex) {
     return fail(fmt::format("{}: invalid manifest: {}", name, ex.what()));

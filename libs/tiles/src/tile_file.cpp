@@ -2,7 +2,9 @@
 
 #include <zlib.h>
 
+#include <algorithm>
 #include <bit>
+#include <cmath>
 #include <cstring>
 
 #include <fmt/format.h>
@@ -122,6 +124,21 @@ Result<TileHeader> parse_tile_header(std::span<const std::byte> bytes, const std
   if (2 * h.border >= h.width || 2 * h.border >= h.height) {
     return fail(
         fmt::format("{}: bad tile shape {}x{} border {}", name, h.width, h.height, h.border));
+  }
+  // Readers bound heights and colours by these (the level index is made of
+  // them): a NaN or an infinity, or a min above the max, is a forged or
+  // damaged header.
+  // The mean, a sum divided, may round past min or max by an ulp or so.
+  const SampleStats& st = h.stats;
+  const double slack = 1e-9 * std::max({1.0, std::abs(st.min), std::abs(st.max)});
+  if (st.valid_count > 0 &&
+      !(std::isfinite(st.min) && std::isfinite(st.max) && std::isfinite(st.stddev) &&
+        st.min <= st.max && st.mean >= st.min - slack && st.mean <= st.max + slack &&
+        st.stddev >= 0)) {
+    return fail(
+        fmt::format("{}: tile header statistics min {} max {} mean {} std {} are not finite with "
+                    "min <= mean <= max",
+                    name, st.min, st.max, st.mean, st.stddev));
   }
   if (h.payload_size != bytes.size() - kTileHeaderSize) {
     return fail(fmt::format("{}: truncated tile (payload {} bytes, header says {})", name,

@@ -62,15 +62,15 @@ Result<LevelIndex> read_old_index(const fs::path& root, int level, Executor& exe
   return index;
 }
 
-// Whether a level index of the store is of format version 1.
+// Whether a level index of the store is of format version 1; one that is
+// also damaged is that error (read as version 1, it would be upgraded).
 Result<bool> has_version1_index(const fs::path& root, const Manifest& manifest) {
   for (int level = manifest.min_level; level <= manifest.max_level; ++level) {
     const fs::path path = root / level_index_relative_path(level);
     const auto bytes = RELIEF_TRY(read_file(path, kMaxLevelIndexBytes));
-    if (!LevelIndex::parse(bytes, path.string()) &&
-        LevelIndex::parse_for_upgrade(bytes, path.string())) {
-      return true;
-    }
+    if (LevelIndex::parse(bytes, path.string())) continue;
+    RELIEF_CHECK(LevelIndex::parse_for_upgrade(bytes, path.string()));
+    return true;
   }
   return false;
 }

@@ -1,6 +1,8 @@
 #include "relief/tiles/verify.h"
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 #include <mutex>
 #include <set>
 
@@ -40,6 +42,68 @@ void check_geometric_errors(const Store& store, Executor& executor, Progress& pr
       }
     }
   }
+}
+
+// The tile is what its header says it holds: as many valid samples, within
+// its min and max (exactly those of a lossless codec; JPEG and WebP colours
+// are approximate).
+Status check_tile_agrees(const Tile& tile, const fs::path& path) {
+  const TileHeader& h = tile.header;
+  const int b = h.border;
+  const SampleStats s =
+      tile.raster.stats(b, b, tile.raster.width() - 2 * b, tile.raster.height() - 2 * b);
+  const bool lossless = h.codec == Codec::Zstd || h.codec == Codec::Png;
+  const bool approximate = h.codec == Codec::Jpeg || h.codec == Codec::Webp;
+  // LERC's bounds are the header's widened by max_error, which a decoded
+  // float may pass by a rounding.
+  const double slack = 1e-6 * std::max({1.0, std::abs(h.stats.min), std::abs(h.stats.max)});
+  const bool bounded = s.valid_count == 0 || approximate ||
+                       (lossless ? s.min == h.stats.min && s.max == h.stats.max
+                                 : s.min >= h.stats.min - slack && s.max <= h.stats.max + slack);
+  if (s.valid_count != h.stats.valid_count || !bounded) {
+    return fail(fmt::format(
+        "{}: the header says {} valid samples in [{}, {}], the samples are {} in [{}, {}]",
+        path.string(), h.stats.valid_count, h.stats.min, h.stats.max, s.valid_count, s.min, s.max));
+  }
+  return {};
+}
+
+// The manifest describes the finest level's tiles: its extent meets each of
+// them, its min and max are within the bounds the level index keeps of them.
+Status check_manifest_range(const Store& store) {
+  const Manifest& m = store.manifest();
+  const auto& entries = store.index(m.max_level).entries();
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (const IndexEntry& e : entries) {
+    if (e.valid_count == 0) continue;
+    lo = std::min(lo, static_cast<double>(e.min));
+    hi = std::max(hi, static_cast<double>(e.max));
+  }
+  // Every tile of the finest level lies in the extent (or in it a turn of
+  // the globe away: an extent may reach past the antimeridian).
+  const geo::GeoBox& x = m.extent;
+  for (const IndexEntry& e : entries) {
+    const geo::GeoBox t = e.key.bounds();
+    bool meets = false;
+    for (double turn : {-360.0, 0.0, 360.0}) {
+      meets = meets || t.intersects({x.west + turn, x.south, x.east + turn, x.north});
+    }
+    if (!meets) {
+      return fail(fmt::format(
+          "{}: extent W {} S {} E {} N {} does not meet tile {} (W {} S {} E {} N {}) of the "
+          "finest level",
+          (store.root() / kManifestName).string(), x.west, x.south, x.east, x.north,
+          e.key.to_string(), t.west, t.south, t.east, t.north));
+    }
+  }
+  if (m.stats.valid_count == 0 || lo > hi) return {};
+  if (!(m.stats.min >= lo && m.stats.max <= hi)) {
+    return fail(fmt::format(
+        "{}: statistics min {} max {} are outside the finest level's samples, [{}, {}] by its "
+        "index",
+        (store.root() / kManifestName).string(), m.stats.min, m.stats.max, lo, hi));
+  }
+  return {};
 }
 
 }  // namespace
@@ -83,6 +147,7 @@ VerifyReport verify_store(const fs::path& root, Executor& executor, Progress& pr
         "{}: statistics count {} valid samples, the finest level's index {}",
         (root / kManifestName).string(), store->manifest().stats.valid_count, finest_valid));
   }
+  if (auto st = check_manifest_range(*store); !st) report.problems.push_back(st.error().message);
   for (const auto& e : indexed) {
     if (!on_disk.count(e.key)) {
       report.problems.push_back(fmt::format("{}: tile {} is in the index but missing",
@@ -99,10 +164,12 @@ VerifyReport verify_store(const fs::path& root, Executor& executor, Progress& pr
   }
 
   std::mutex mutex;
+  size_t other_codec = 0;  // tiles not coded with the manifest's codec
+  std::string other_codec_example;
   progress.begin("verify", indexed.size());
   executor.parallel_for(indexed.size(), [&](size_t i) {
     const IndexEntry& e = indexed[i];
-    std::string problem;
+    std::string problem, codec;
     if (on_disk.count(e.key)) {
       auto tile = store->read_tile(e.key);
       if (!tile) {
@@ -111,14 +178,30 @@ VerifyReport verify_store(const fs::path& root, Executor& executor, Progress& pr
         problem = fmt::format("{}: valid sample count {} disagrees with the index ({})",
                               store->tile_path(e.key).string(), tile->header.stats.valid_count,
                               e.valid_count);
+      } else if (auto st = check_tile_agrees(*tile, store->tile_path(e.key)); !st) {
+        problem = st.error().message;
+      }
+      if (tile && tile->header.codec != store->manifest().codec.codec) {
+        codec =
+            fmt::format("{} ({})", store->tile_path(e.key).string(), to_string(tile->header.codec));
       }
     }
     std::lock_guard lock(mutex);
     ++report.tiles_checked;
     if (!problem.empty()) report.problems.push_back(problem);
+    if (!codec.empty() && (other_codec++ == 0 || codec < other_codec_example)) {
+      other_codec_example = codec;  // the first by name, whatever the threads' order
+    }
     progress.advance();
   });
   progress.end();
+  // The manifest's codec contradicts the tiles: one line, not one per tile.
+  if (other_codec > 0) {
+    report.problems.push_back(
+        fmt::format("{}: codec {} contradicts {} of the {} tiles, coded otherwise (e.g. {})",
+                    (root / kManifestName).string(), to_string(store->manifest().codec.codec),
+                    other_codec, indexed.size(), other_codec_example));
+  }
   // Only over tiles that read back: a broken tile is reported above already.
   if (report.ok() && store->manifest().kind == DatasetKind::Elevation) {
     check_geometric_errors(*store, executor, progress, report);

@@ -45,6 +45,16 @@ Status Viewer::Impl::make_scene() {
     if (!wakeup->posted.exchange(true)) w->wake();
   };
   scene = RELIEF_TRY(view::Scene::create(elevation, layer, so, clock));
+  // On the render thread (the loader's begin_frame), as the map is used.
+  for (auto [name, loader] : {std::pair{"elevation", scene->elevation_loader()},
+                              std::pair{"imagery", scene->imagery_loader()}}) {
+    if (!loader) continue;
+    loader->subscribe([this, name](const stream::TileEvent& e) {
+      const std::string key = std::string(name) + " " + e.key.to_string();
+      if (e.kind == stream::TileEventKind::Failed) unreadable[key] = e.error;
+      if (e.kind == stream::TileEventKind::Loaded) unreadable.erase(key);
+    });
+  }
   scene->set_selection_frozen(frozen);  // a new scene has no selection yet: frozen from its first
   progress = {};
   return {};
@@ -425,6 +435,7 @@ ViewerSummary Viewer::summary() const {
   s.frames_list = v.frames;
   s.recorded = v.recorded;
   s.screenshots = v.screenshots;
+  for (const auto& [key, error] : v.unreadable) s.unreadable_tiles.push_back(error);
   return s;
 }
 

@@ -4,6 +4,7 @@
 #include <atomic>
 #include <deque>
 #include <future>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -112,6 +113,9 @@ struct Viewer::Impl {
   std::deque<double> recent_ms;             // the panels' window
   std::vector<ViewerFrame> frames;
   std::vector<std::string> screenshots;
+  // Tiles whose last load failed (the loader's message, which names the
+  // file), by layer and key; a later load of the tile takes it out.
+  std::map<std::string, std::string> unreadable;
   bool panels = true;
 
   std::string layer_error;                              // the texture-layer panel's refused change

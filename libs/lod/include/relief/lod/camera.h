@@ -53,7 +53,8 @@ struct View {
   bool project(const Vec3& p, double& sx, double& sy) const;
 };
 
-// Fails for a camera inside the ellipsoid, a bad field of view or viewport.
+// Fails for a camera inside the ellipsoid, a bad field of view or viewport;
+// the message names no option: the caller knows where the camera came from.
 Result<View> make_view(const Camera& camera);
 
 // `view` drawing only `window`, which must lie inside it (a one-line error

@@ -40,8 +40,8 @@ struct Manifest {
   int tile_log2_height = 8;
   int border = 9;
   int min_level = 0, max_level = 0;
-  geo::GeoBox extent;  // of the source data, degrees
-  SampleStats stats;   // over all valid samples of the finest level
+  geo::GeoBox extent{-180, -90, 180, 90};  // of the source data, degrees
+  SampleStats stats;                       // over all valid samples of the finest level
   CodecOptions codec;
   std::vector<SourceInfo> sources;
   std::string created_by;

@@ -141,6 +141,9 @@ struct ViewerSummary {
   std::vector<ViewerFrame> frames_list;       // collect_frames only
   std::vector<lod::Keyframe> recorded;        // the cameras recorded
   std::vector<std::string> screenshots;       // files written by F12
+  // The errors of tiles (elevation, imagery) whose last load failed, each
+  // naming the tile's file: a corrupt or missing tile the view went without.
+  std::vector<std::string> unreadable_tiles;
 };
 
 class Viewer {
