@@ -128,6 +128,9 @@ Result<Source> describe_source(const std::string& path, tiles::DatasetKind kind,
   }
   const GDALDataType type = GDALGetRasterDataType(GDALGetRasterBand(ds.get(), 1));
   s.data_type = GDALGetDataTypeName(type);
+  s.sample_bytes = GDALGetDataTypeSizeBytes(type);
+  int block_width = 0;
+  GDALGetBlockSize(GDALGetRasterBand(ds.get(), 1), &block_width, &s.block_height);
   s.mosaic_key = mosaic_key_of(ds.get());
   if (is_complex(type)) {
     return fail(

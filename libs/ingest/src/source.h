@@ -20,6 +20,8 @@ struct Source {
   int colour_bands = 0;  // bands carried into the store (alpha excluded)
   bool has_alpha = false;
   std::string data_type;
+  int sample_bytes = 0;  // of data_type
+  int block_height = 1;  // rows of the blocks GDAL reads and caches
   // What GDAL's VRT builder requires to be equal between mosaicked files
   // (data type, colour interpretation and table per band); it skips a file
   // that differs, so only sources with equal keys share a mosaic.
