@@ -148,7 +148,10 @@ TEST_F(Upgrade, ADamagedOldIndexIsTheSameErrorToReadersAndUpgrade) {
   std::memcpy(&count, bytes.data() + 28, 8);
   ++count;
   std::memcpy(bytes.data() + 28, &count, 8);
-  bytes.resize(bytes.size() - 4);
+  ASSERT_GT(bytes.size(), 36u);
+  // Erased, not resized: GCC at -O1 (the asan preset) cannot rule out a
+  // wrapped size in resize(size - 4) and fails the build on it.
+  bytes.erase(bytes.end() - 4, bytes.end());
   const uint32_t crc = tiles::crc32_of(bytes);
   const auto* c = reinterpret_cast<const std::byte*>(&crc);
   bytes.insert(bytes.end(), c, c + 4);
