@@ -15,6 +15,10 @@ packages=(
   ferret-datasets                                                        # ETOPO5, the whole-Earth DEM of the main job
   clang-19 libclang-rt-19-dev  # fuzz/: libFuzzer (clang >= 16 compiles <expected>)
 )
+# Node.js runs the web tests' independent decoders (CesiumJS, loaders.gl) and
+# drives the browser; the machine image brings node 20 from NodeSource. Only
+# where there is none does Debian's (older) nodejs come in.
+command -v npm >/dev/null || packages+=(nodejs npm)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
@@ -24,3 +28,7 @@ if ((${#missing[@]})); then
   $SUDO apt-get update -q
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -q --no-install-recommends "${missing[@]}"
 fi
+
+# The web tests' JavaScript packages, exact versions from the committed
+# package-lock.json (the npm registry; no download at test time).
+npm ci --prefix tests/web/js --no-audit --no-fund --loglevel=error

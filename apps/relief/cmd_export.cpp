@@ -7,6 +7,7 @@
 #include "allocator.h"
 #include "args.h"
 #include "commands.h"
+#include "export_web.h"
 #include "output_safety.h"
 #include "relief/ingest/export.h"
 #include "relief/tiles/store.h"
@@ -16,11 +17,20 @@ namespace relief::cli {
 namespace {
 constexpr const char* kExportHelp =
     R"(usage: relief export STORE --level L [--bbox W,S,E,N] [--memory SIZE] -o OUT.tif
+       relief export STORE --format quantized-mesh [--max-level M] [--bbox W,S,E,N]
+                     [--max-error METRES] [--threads N] -o DIR
 
 Reassembles tile interiors of one level into a GeoTIFF (EPSG:4326, the store's
 sample grid; NaN or alpha marks nodata). The box is snapped outwards to samples.
 --memory bounds the whole process (default 256MiB, at least 96MiB), whatever
 the size of the output.
+
+--format quantized-mesh writes Cesium terrain for a static web host:
+DIR/layer.json and DIR/{z}/{x}/{y}.terrain (gzip-compressed: serve them with
+"Content-Encoding: gzip", docs/web.md), every level up to M (default: the
+store's finest). Each mesh keeps the level's lattice within CesiumJS's error
+for the level (an eighth of it at the finest level) unless --max-error says
+otherwise. An earlier export at DIR is replaced when the new one is complete.
 )";
 
 Result<geo::GeoBox> parse_bbox(const std::string& text) {
@@ -39,11 +49,28 @@ Result<geo::GeoBox> parse_bbox(const std::string& text) {
 
 int run_export(const std::vector<std::string>& argv) {
   if (wants_help(argv)) return print_help(kExportHelp);
-  auto args = Args::parse(
-      argv, {{"--level"}, {"--bbox"}, {"--memory"}, {"--output", "-o"}, {"--quiet", "-q", false}},
-      "export");
+  auto args = Args::parse(argv,
+                          {{"--level"},
+                           {"--bbox"},
+                           {"--memory"},
+                           {"--output", "-o"},
+                           {"--quiet", "-q", false},
+                           {"--format"},
+                           {"--max-level"},
+                           {"--max-error"},
+                           {"--threads"}},
+                          "export");
   if (!args) return report_error(args.error().message);
   if (args->positional().size() != 1) return report_error("export: expected exactly one STORE");
+  if (auto format = args->get("--format"); format && *format != "geotiff") {
+    return run_export_web(*args, *format);
+  }
+  for (const char* web_only : {"--max-level", "--max-error", "--threads"}) {
+    if (args->has(web_only)) {
+      return report_error(
+          fmt::format("export: {} applies to --format quantized-mesh only", web_only));
+    }
+  }
   ingest::ExportOptions o;
   o.store = args->positional()[0];
   auto level = args->get_int("--level", 0, 30);

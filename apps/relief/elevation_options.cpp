@@ -26,7 +26,7 @@ const char* const kElevationOptionsHelp =
 
 namespace {
 
-struct LensText {
+struct ElevationLensText {
   std::string where;
   OperatorTexts ops;
 };
@@ -36,7 +36,7 @@ struct LensText {
 Result<pipeline::ElevationProcessing> take_elevation_processing(std::vector<std::string>& argv) {
   std::vector<std::string> rest;
   OperatorTexts ops;
-  std::vector<LensText> lenses;
+  std::vector<ElevationLensText> lenses;
   for (size_t i = 0; i < argv.size(); ++i) {
     std::string name = argv[i], value;
     if (auto eq = name.find('='); name.starts_with("--") && eq != std::string::npos) {
@@ -74,7 +74,7 @@ Result<pipeline::ElevationProcessing> take_elevation_processing(std::vector<std:
   }
   pipeline::ElevationProcessing p;
   p.chain = RELIEF_TRY(make_chain("--elevation-op", ops));
-  for (const LensText& t : lenses) {
+  for (const ElevationLensText& t : lenses) {
     const LensCircle c = RELIEF_TRY(parse_lens_circle("--elevation-lens", t.where));
     pipeline::ElevationLens lens{c.lon, c.lat, c.radius_m, {}};
     lens.chain = RELIEF_TRY(make_chain("--elevation-lens-op", t.ops));

@@ -19,7 +19,7 @@ commands:
   info     describe a store: manifest, tiles and bytes per level, compression
   verify   check every tile header and checksum of a store
   upgrade  bring a store written by an older relief up to the current format
-  export   reassemble one level of a store into a GeoTIFF
+  export   one level of a store as a GeoTIFF, or Cesium terrain tiles
   process  run an operator (speckle filter, dynamic-range reduction, ...) over a GeoTIFF or a store
   fuse     combine stores of one kind tile by tile (weighted blend or void filling)
   detect   find point targets in a SAR image: GeoJSON, analysis JSON and plot
