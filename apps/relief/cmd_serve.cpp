@@ -7,6 +7,8 @@
 #include "args.h"
 #include "commands.h"
 #include "relief/serve/store_server.h"
+#include "relief/tiles/store.h"
+#include "relief/web/web_service.h"
 
 namespace relief::cli {
 
@@ -21,6 +23,10 @@ HEAD, keep-alive, Content-Length, ETag with If-None-Match, single byte
 ranges, cache headers. Slow or idle clients cannot starve the others: each
 connection has read and write deadlines.
 Any static web server (nginx, ...) serving the store directory works the same.
+
+An elevation store is also served to web clients (docs/web.md), tiles made on
+request and cached:
+  /terrain/layer.json, /terrain/{z}/{x}/{y}.terrain   Cesium quantized-mesh
 
 options:
   --port P       TCP port (default 8080; 0: any free port, printed)
@@ -85,6 +91,24 @@ int run_serve(const std::vector<std::string>& argv) {
           fmt::format("serve: {} {}: expected seconds in [0.001, 86400]", name, **seconds));
     }
     *timeout = std::chrono::milliseconds(static_cast<int64_t>(**seconds * 1000));
+  }
+  std::shared_ptr<web::WebService> web;
+  if (auto store = tiles::Store::open(o.root);
+      store && store->manifest().kind == tiles::DatasetKind::Elevation) {
+    const std::string name = o.root.filename().empty() ? o.root.parent_path().filename().string()
+                                                       : o.root.filename().string();
+    auto terrain =
+        web::TerrainTiler::create(std::make_shared<const tiles::Store>(std::move(*store)));
+    if (!terrain) return report_error(terrain.error().message);
+    web = std::make_shared<web::WebService>(
+        std::make_shared<const web::TerrainTiler>(std::move(*terrain)),
+        web::WebServiceOptions{.name = name});
+    o.generate = [web](std::string_view target) -> std::optional<serve::GeneratedAnswer> {
+      auto a = web->answer(target);
+      if (!a) return std::nullopt;
+      return serve::GeneratedAnswer{std::move(a->content_type), std::move(a->content_encoding),
+                                    std::move(a->body)};
+    };
   }
   // Block the stop signals before the server's threads start, so only the
   // main thread receives them (sigwait below).

@@ -4,6 +4,9 @@
 // packages pinned by package-lock.json and installed by scripts/setup.sh).
 #include <gtest/gtest.h>
 
+#include <signal.h>
+#include <sys/wait.h>
+
 #include <cstdio>
 #include <nlohmann/json.hpp>
 #include <random>
@@ -13,6 +16,7 @@
 #include "relief/tiles/store.h"
 #include "relief/web/quantized_mesh.h"
 #include "relief/web/terrain_tiler.h"
+#include "servers.h"
 #include "test_support.h"
 
 namespace relief::web {
@@ -40,9 +44,10 @@ class IndependentDecoders : public testing::SmallStoreSuite {
         << "CesiumJS is missing: run scripts/setup.sh (npm ci in tests/web/js)";
   }
 
-  // Exports the store with `extra` options, then asks CesiumJS and loaders.gl
+  // Exports the store with `extra` options (with `served`, also starts
+  // `relief serve` and reads from it), then asks CesiumJS and loaders.gl
   // for heights at lattice points of the finest level and for a few tiles.
-  void check(const std::vector<std::string>& extra, double max_error) {
+  void check(const std::vector<std::string>& extra, double max_error, bool served = false) {
     testing::ScratchDir dir("web_decoders");
     const fs::path out = dir / "terrain";
     std::vector<std::string> args = {"export", store().string(), "--format", "quantized-mesh",
@@ -50,6 +55,20 @@ class IndependentDecoders : public testing::SmallStoreSuite {
     args.insert(args.end(), extra.begin(), extra.end());
     auto r = testing::run_relief(args);
     ASSERT_EQ(r.exit_code, 0) << r.err;
+    std::string source = out.string();
+    int server = 0;
+    if (served) {
+      const int port = testing::free_port();
+      server = testing::spawn_relief({"serve", store().string(), "--port", std::to_string(port)});
+      testing::wait_for(port);
+      source = "http://127.0.0.1:" + std::to_string(port) + "/terrain/";
+    }
+    const struct Stop {
+      int pid;
+      ~Stop() {
+        if (pid > 0) ::kill(pid, SIGTERM), ::waitpid(pid, nullptr, 0);
+      }
+    } stop{server};
 
     auto opened = tiles::Store::open(store());
     ASSERT_TRUE(opened.has_value());
@@ -93,7 +112,7 @@ class IndependentDecoders : public testing::SmallStoreSuite {
 
     int status = -1;
     const std::string text =
-        run_node({(fs::path(RELIEF_WEB_JS_DIR) / "decode_terrain.cjs").string(), out.string(),
+        run_node({(fs::path(RELIEF_WEB_JS_DIR) / "decode_terrain.cjs").string(), source,
                   (dir / "request.json").string()},
                  status);
     ASSERT_EQ(status, 0) << text;
@@ -144,6 +163,14 @@ TEST_F(IndependentDecoders, CesiumAndLoadersGlReadTheSimplifiedTerrain) {
 
 TEST_F(IndependentDecoders, CesiumReadsTheFullLatticeExactly) {
   check({"--max-error", "0"}, 0);
+}
+
+// The server's tiles, made on request, against the exported files (the
+// tile reports compare with the files) and the store's heights.
+TEST_F(IndependentDecoders, CesiumReadsReliefServesTerrainRoutes) {
+  auto opened = tiles::Store::open(store());
+  ASSERT_TRUE(opened.has_value());
+  check({}, cesium_level_error(opened->manifest().max_level) / 8, true);
 }
 
 }  // namespace

@@ -53,6 +53,29 @@ int open_regular_file(const std::filesystem::path& path, struct stat& st) {
   return fd;
 }
 
+// A generated body's version is its content: a 64-bit hash and the length.
+Answer generated_answer(const Request& r, const GeneratedAnswer& g, bool keep_alive,
+                        bool head_only) {
+  const std::string etag =
+      fmt::format("\"g{:016x}-{:x}\"", std::hash<std::string_view>{}(g.body), g.body.size());
+  std::string common = fmt::format(
+      "Server: relief\r\nETag: {}\r\nCache-Control: public, max-age=300\r\n"
+      "Access-Control-Allow-Origin: *\r\nConnection: {}\r\n",
+      etag, connection(keep_alive));
+  Answer a;
+  a.close = !keep_alive;
+  if (r.if_none_match && if_none_match_matches(*r.if_none_match, etag)) {
+    a.head = "HTTP/1.1 304 Not Modified\r\n" + common + "\r\n";
+    return a;
+  }
+  if (!g.content_encoding.empty())
+    common += fmt::format("Content-Encoding: {}\r\n", g.content_encoding);
+  a.head = fmt::format("HTTP/1.1 200 OK\r\n{}Content-Type: {}\r\nContent-Length: {}\r\n\r\n",
+                       common, g.content_type, g.body.size());
+  if (!head_only) a.head += g.body;
+  return a;
+}
+
 }  // namespace
 
 Answer status_answer(int code, bool keep_alive, bool head_only, std::string_view extra_fields) {
@@ -68,13 +91,16 @@ Answer status_answer(int code, bool keep_alive, bool head_only, std::string_view
 }
 
 Answer answer_request(const std::filesystem::path& root, const Request& r, uint32_t share_index,
-                      uint32_t share_count) {
+                      uint32_t share_count, const Generator& generate) {
   const bool head_only = r.method == "HEAD";
   const bool keep_alive = r.keep_alive && !r.has_body;  // a body is never read: end there
   if (r.method != "GET" && !head_only) {
     return status_answer(405, keep_alive, false, "Allow: GET, HEAD\r\n");
   }
   const auto file = store_file_for(r.target);
+  if (!file && generate) {
+    if (auto g = generate(r.target)) return generated_answer(r, *g, keep_alive, head_only);
+  }
   if (!file || !in_share(*file, share_index, share_count)) {
     return status_answer(404, keep_alive, head_only);
   }

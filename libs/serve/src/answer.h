@@ -8,6 +8,7 @@
 #include <string_view>
 
 #include "http_request.h"
+#include "relief/serve/store_server.h"
 
 namespace relief::serve {
 
@@ -28,7 +29,11 @@ Answer status_answer(int code, bool keep_alive, bool head_only = false,
 // range, 200 otherwise.
 // Only the files of share `share_index` of `share_count` are served (see
 // ServeOptions).
+// Paths that are no store file go to `generate` when set: its answer is sent
+// with an ETag of its body (304 on a match), without ranges, and open to
+// pages of any origin (Access-Control-Allow-Origin: *).
 Answer answer_request(const std::filesystem::path& root, const Request& request,
-                      uint32_t share_index = 0, uint32_t share_count = 1);
+                      uint32_t share_index = 0, uint32_t share_count = 1,
+                      const Generator& generate = {});
 
 }  // namespace relief::serve

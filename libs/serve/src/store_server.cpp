@@ -318,7 +318,8 @@ bool Loop::serve_buffered(Connection& c, Clock::time_point now) {
       start_answer(c,
                    request
                        ? answer_request(server_.options_.root, *request,
-                                        server_.options_.share_index, server_.options_.share_count)
+                                        server_.options_.share_index, server_.options_.share_count,
+                                        server_.options_.generate)
                        : status_answer(400, false),
                    now);
     }

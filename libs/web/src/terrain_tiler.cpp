@@ -342,7 +342,7 @@ std::string TerrainTiler::layer_json(const std::string& name) const {
        impl_->options.normals ? nlohmann::json{"octvertexnormals"} : nlohmann::json::array()},
       {"available", available},
   };
-  return layer.dump(1);
+  return layer.dump();
 }
 
 Result<std::vector<std::byte>> TerrainTiler::tile(const TerrainKey& key) const {

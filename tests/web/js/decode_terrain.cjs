@@ -1,7 +1,9 @@
 #!/usr/bin/env node
 // Independent decoder check for relief's quantized-mesh-1.0 export.
 //
-//   node decode_terrain.cjs DIR REQUEST.json
+//   node decode_terrain.cjs DIR|URL REQUEST.json
+//
+// URL: a server's terrain root, e.g. http://127.0.0.1:8080/terrain/ (relief serve).
 //
 // REQUEST.json: {"level": L, "points": [[lonDeg, latDeg], ...], "tiles": [[z, x, yTms], ...]}
 // Prints one JSON object on stdout. Exit 0 when every requested tile decoded;
@@ -145,11 +147,19 @@ async function loadersDecoder() {
   return lgDecode;
 }
 
-async function loadersReport(file, rectDeg) {
-  const gz = fs.readFileSync(file);
+// The tile's uncompressed bytes: from a file (gzip on disk) or from a server
+// (fetch undoes its Content-Encoding: gzip).
+async function tileBytes(source, z, x, y) {
+  if (!source.startsWith('http')) return zlib.gunzipSync(fs.readFileSync(path.join(source, `${z}`, `${x}`, `${y}.terrain`)));
+  const response = await fetch(`${source}${z}/${x}/${y}.terrain`);
+  if (!response.ok) throw new Error(`HTTP ${response.status}`);
+  return Buffer.from(await response.arrayBuffer());
+}
+
+async function loadersReport(raw, rectDeg) {
   // loaders.gl indexes dataView.buffer from 0, ignoring byteOffset: a Node Buffer
   // (pooled, non-zero offset) must be copied into its own ArrayBuffer.
-  const copy = () => { const raw = zlib.gunzipSync(gz); return raw.buffer.slice(raw.byteOffset, raw.byteOffset + raw.byteLength); };
+  const copy = () => raw.buffer.slice(raw.byteOffset, raw.byteOffset + raw.byteLength);
   const mesh = await parse(copy(), QuantizedMeshLoader,
     { core: { worker: false }, 'quantized-mesh': { bounds: rectDeg } });
   const pos = mesh.attributes.POSITION.value;                       // Float32 lon, lat, h
@@ -173,13 +183,15 @@ async function loadersReport(file, rectDeg) {
 // --- main ---------------------------------------------------------------------
 async function main() {
   const [dir, reqFile] = process.argv.slice(2);
-  if (!dir || !reqFile) throw new Error('usage: node decode_terrain.cjs DIR REQUEST.json');
+  if (!dir || !reqFile) throw new Error('usage: node decode_terrain.cjs DIR|URL REQUEST.json');
   const request = JSON.parse(fs.readFileSync(reqFile, 'utf8'));
-  const server = await serve(dir);
+  // A URL (relief serve's /terrain/) is read as it is; a directory is served here.
+  const remote = dir.startsWith('http://');
+  const server = remote ? null : await serve(dir);
   let failed = 0;
   let out;
   try {
-    const url = `http://127.0.0.1:${server.address().port}/`;
+    const url = remote ? dir : `http://127.0.0.1:${server.address().port}/`;
     let provider;
     try {
       provider = await Cesium.CesiumTerrainProvider.fromUrl(url, { requestVertexNormals: true });
@@ -211,7 +223,7 @@ async function main() {
       const t = { z, x, y, available: avail === undefined ? null : avail, rectangle: rectDeg };
       try {
         t.cesium = cesiumReport(await requestGeometry(provider, x, yC, z), rect);
-        t.loaders = await loadersReport(path.join(dir, `${z}`, `${x}`, `${y}.terrain`), rectDeg);
+        t.loaders = await loadersReport(await tileBytes(remote ? url : dir, z, x, y), rectDeg);
       } catch (e) {
         t.error = errText(e);
         failed += 1;
@@ -226,7 +238,7 @@ async function main() {
       tiles,
     }) + '\n';
   } finally {
-    server.close();
+    if (server) server.close();
   }
   return { out, code: failed ? 1 : 0 };
 }

@@ -13,10 +13,24 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
 
 #include "relief/base/result.h"
 
 namespace relief::serve {
+
+// An answer made on request rather than read from a store file: web tiles and
+// pages (libs/web, plugged in by apps/relief; serve does not depend on it).
+struct GeneratedAnswer {
+  std::string content_type;
+  std::string content_encoding;  // "" or, for a body stored compressed, "gzip"
+  std::string body;
+};
+// Called for every GET or HEAD whose path is not one of the store's files,
+// on the event loop threads, several at once: it must be thread-safe and
+// should be quick (a loop serves its other connections after it returns).
+// nullopt: 404.
+using Generator = std::function<std::optional<GeneratedAnswer>(std::string_view target)>;
 
 struct ServeOptions {
   std::filesystem::path root;
@@ -37,6 +51,8 @@ struct ServeOptions {
   // share_index; the manifest and level indices always. Other tiles get 404.
   // Readers take such servers with the `cyclic:` URL list (net::source_for).
   uint32_t share_index = 0, share_count = 1;
+  // Answers for paths outside the store's files (empty: 404 for all).
+  Generator generate;
   // The clock deadlines are measured with (tests move it forward); empty:
   // std::chrono::steady_clock::now.
   std::function<std::chrono::steady_clock::time_point()> clock;

@@ -1,0 +1,151 @@
+// `relief serve` answering web clients: /terrain/layer.json and
+// /terrain/{z}/{x}/{y}.terrain made on request, with ETags, HEAD, CORS, and
+// a 404 for every malformed or hostile path; the store's files as before.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+
+#include <nlohmann/json.hpp>
+#include <thread>
+
+#include "http_client.h"
+#include "qm_decoder.h"
+#include "relief/base/file_io.h"
+#include "relief/tiles/store.h"
+#include "relief/web/web_service.h"
+#include "servers.h"
+#include "test_support.h"
+
+namespace relief::web {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::get;
+using testing::Response;
+
+std::vector<std::byte> bytes_of(const std::string& s) {
+  const auto* p = reinterpret_cast<const std::byte*>(s.data());
+  return {p, p + s.size()};
+}
+
+class ServeRoutes : public testing::SmallStoreSuite {
+ protected:
+  static void SetUpTestSuite() {
+    SmallStoreSuite::SetUpTestSuite();
+    port_ = testing::free_port();
+    pid_ = testing::spawn_relief({"serve", store().string(), "--port", std::to_string(port_)});
+    testing::wait_for(port_);
+  }
+  static void TearDownTestSuite() {
+    ::kill(pid_, SIGTERM);
+    int status = 0;
+    ::waitpid(pid_, &status, 0);
+    EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+    SmallStoreSuite::TearDownTestSuite();
+  }
+  static Response raw_get(const std::string& target, const std::string& fields = "") {
+    return testing::request(
+        port_, "GET " + target + " HTTP/1.1\r\nHost: x\r\n" + fields + "Connection: close\r\n\r\n");
+  }
+  static inline int port_ = 0, pid_ = 0;
+};
+
+TEST_F(ServeRoutes, LayerJsonDescribesTheStoresTerrain) {
+  const Response r = get(port_, "/terrain/layer.json");
+  ASSERT_EQ(r.status, 200);
+  EXPECT_EQ(r.headers.at("content-type"), "application/json");
+  EXPECT_EQ(r.headers.at("access-control-allow-origin"), "*");
+  const auto layer = nlohmann::json::parse(r.body);
+  EXPECT_EQ(layer["format"], "quantized-mesh-1.0");
+  EXPECT_EQ(layer["tiles"], nlohmann::json({"{z}/{x}/{y}.terrain"}));
+  EXPECT_EQ(layer["maxzoom"], 10);
+}
+
+TEST_F(ServeRoutes, TilesAreGzipQuantizedMeshWithEtagsAndHead) {
+  const std::string target = "/terrain/10/1032/753.terrain";
+  const Response r =
+      raw_get(target + "?v=1.0.0&extensions=octvertexnormals",
+              "Accept: application/vnd.quantized-mesh;extensions=octvertexnormals\r\n");
+  ASSERT_EQ(r.status, 200) << r.body;
+  EXPECT_EQ(r.headers.at("content-encoding"), "gzip");
+  EXPECT_EQ(r.headers.at("content-type"), "application/vnd.quantized-mesh");
+  const auto mesh = testing::decode_quantized_mesh(testing::gunzip(bytes_of(r.body)));
+  EXPECT_GT(mesh.indices.size(), 0u);
+  EXPECT_EQ(mesh.extensions, 1);
+  // The same bytes as `relief export` writes.
+  testing::ScratchDir dir("serve_routes");
+  ASSERT_EQ(testing::run_relief({"export", store().string(), "--format", "quantized-mesh", "-o",
+                                 (dir / "t").string(), "-q"})
+                .exit_code,
+            0);
+  auto exported = read_file(dir / ("t" + target.substr(8)), 1 << 24);
+  ASSERT_TRUE(exported.has_value());
+  EXPECT_EQ(bytes_of(r.body), *exported);
+
+  const std::string etag = r.headers.at("etag");
+  EXPECT_EQ(raw_get(target, "If-None-Match: " + etag + "\r\n").status, 304);
+  EXPECT_EQ(raw_get(target, "If-None-Match: \"other\"\r\n").status, 200);
+  const Response head = testing::request(
+      port_, "HEAD " + target + " HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n", true);
+  EXPECT_EQ(head.status, 200);
+  EXPECT_EQ(head.headers.at("content-length"), std::to_string(r.body.size()));
+  EXPECT_TRUE(head.body.empty());
+}
+
+TEST_F(ServeRoutes, MalformedAndHostilePathsGet404AndTheServerStays) {
+  for (const std::string target : {"/terrain/31/0/0.terrain",
+                                   "/terrain/11/4116/1514.terrain",
+                                   "/terrain/1/4/0.terrain",
+                                   "/terrain/1/0/2.terrain",
+                                   "/terrain/01/0/0.terrain",
+                                   "/terrain/-1/0/0.terrain",
+                                   "/terrain/1/+0/0.terrain",
+                                   "/terrain/1/0x1/0.terrain",
+                                   "/terrain/a/0/0.terrain",
+                                   "/terrain/1//0.terrain",
+                                   "/terrain/1/0/0/0.terrain",
+                                   "/terrain/1/0/0.terrain.gz",
+                                   "/terrain/1/0/0",
+                                   "/terrain/4294967297/0/0.terrain",
+                                   "/terrain/1/4294967296/0.terrain",
+                                   "/terrain/../manifest.json",
+                                   "/terrain/%2e%2e/manifest.json",
+                                   "/terrain/./layer.json",
+                                   "/terrain/layer.json/../../../etc/passwd",
+                                   "/terrain",
+                                   "/terrain/",
+                                   "/terrain/3/0/0.terrain",
+                                   "/terrain/10/0/0.terrain"}) {
+    SCOPED_TRACE(target);
+    const Response r = raw_get(target);
+    EXPECT_EQ(r.status, 404);
+    EXPECT_EQ(r.body.find("root:"), std::string::npos);
+  }
+  EXPECT_EQ(get(port_, "/manifest.json").status, 200) << "store files are still served";
+}
+
+TEST_F(ServeRoutes, ConcurrentRequestsForOneTileMakeItOnce) {
+  auto store = tiles::Store::open(SmallStoreSuite::store());
+  ASSERT_TRUE(store.has_value());
+  auto tiler = TerrainTiler::create(std::make_shared<const tiles::Store>(std::move(*store)));
+  ASSERT_TRUE(tiler.has_value());
+  const WebService service(std::make_shared<const TerrainTiler>(std::move(*tiler)));
+  std::vector<std::thread> threads;
+  std::vector<std::string> bodies(8);
+  for (size_t i = 0; i < bodies.size(); ++i) {
+    threads.emplace_back([&, i] {
+      auto a = service.answer("/terrain/10/1032/753.terrain");
+      if (a) bodies[i] = a->body;
+    });
+  }
+  for (auto& t : threads) t.join();
+  EXPECT_EQ(service.tiles_made(), 1u);
+  for (const auto& b : bodies) EXPECT_EQ(b, bodies[0]);
+  EXPECT_FALSE(bodies[0].empty());
+  EXPECT_TRUE(service.answer("/terrain/10/1032/753.terrain").has_value());
+  EXPECT_EQ(service.tiles_made(), 1u) << "answered from the cache";
+  EXPECT_FALSE(service.answer("/elsewhere/10/1032/753.terrain").has_value());
+}
+
+}  // namespace
+}  // namespace relief::web
