@@ -6,6 +6,8 @@
 
 #include <fmt/format.h>
 
+#include <optional>
+
 #include "relief/serve/store_server.h"
 
 namespace relief::serve {
@@ -53,21 +55,33 @@ int open_regular_file(const std::filesystem::path& path, struct stat& st) {
   return fd;
 }
 
+// The fields of every 200, 206 and 304 answer; `extra` says what kind of body.
+std::string common_fields(const std::string& etag, std::string_view extra, bool keep_alive) {
+  return fmt::format(
+      "Server: relief\r\nETag: {}\r\nCache-Control: public, max-age=300\r\n{}"
+      "Connection: {}\r\n",
+      etag, extra, connection(keep_alive));
+}
+
+// 304 when the client already holds this version.
+std::optional<Answer> not_modified(const Request& r, const std::string& etag,
+                                   const std::string& common, bool keep_alive) {
+  if (!r.if_none_match || !if_none_match_matches(*r.if_none_match, etag)) return std::nullopt;
+  Answer a;
+  a.close = !keep_alive;
+  a.head = "HTTP/1.1 304 Not Modified\r\n" + common + "\r\n";
+  return a;
+}
+
 // A generated body's version is its content: a 64-bit hash and the length.
 Answer generated_answer(const Request& r, const GeneratedAnswer& g, bool keep_alive,
                         bool head_only) {
   const std::string etag =
       fmt::format("\"g{:016x}-{:x}\"", std::hash<std::string_view>{}(g.body), g.body.size());
-  std::string common = fmt::format(
-      "Server: relief\r\nETag: {}\r\nCache-Control: public, max-age=300\r\n"
-      "Access-Control-Allow-Origin: *\r\nConnection: {}\r\n",
-      etag, connection(keep_alive));
+  std::string common = common_fields(etag, "Access-Control-Allow-Origin: *\r\n", keep_alive);
+  if (auto a = not_modified(r, etag, common, keep_alive)) return std::move(*a);
   Answer a;
   a.close = !keep_alive;
-  if (r.if_none_match && if_none_match_matches(*r.if_none_match, etag)) {
-    a.head = "HTTP/1.1 304 Not Modified\r\n" + common + "\r\n";
-    return a;
-  }
   if (!g.content_encoding.empty())
     common += fmt::format("Content-Encoding: {}\r\n", g.content_encoding);
   a.head = fmt::format("HTTP/1.1 200 OK\r\n{}Content-Type: {}\r\nContent-Length: {}\r\n\r\n",
@@ -111,17 +125,13 @@ Answer answer_request(const std::filesystem::path& root, const Request& r, uint3
   // Store files are written once, atomically: size and modification time name a version.
   const std::string etag =
       fmt::format("\"{:x}-{:x}{:09x}\"", size, st.st_mtim.tv_sec, st.st_mtim.tv_nsec);
-  const std::string common = fmt::format(
-      "Server: relief\r\nETag: {}\r\nCache-Control: public, max-age=300\r\n"
-      "Accept-Ranges: bytes\r\nConnection: {}\r\n",
-      etag, connection(keep_alive));
+  const std::string common = common_fields(etag, "Accept-Ranges: bytes\r\n", keep_alive);
+  if (auto unchanged = not_modified(r, etag, common, keep_alive)) {
+    ::close(fd);
+    return std::move(*unchanged);
+  }
   Answer a;
   a.close = !keep_alive;
-  if (r.if_none_match && if_none_match_matches(*r.if_none_match, etag)) {
-    ::close(fd);
-    a.head = "HTTP/1.1 304 Not Modified\r\n" + common + "\r\n";
-    return a;
-  }
   RangeAnswer range;
   if (r.range && (!r.if_range || *r.if_range == etag)) range = resolve_range(*r.range, size);
   if (range.kind == RangeKind::unsatisfiable) {
