@@ -6,6 +6,7 @@
 #include <cmath>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <set>
 
 #include "qm_decoder.h"
 #include "relief/base/file_io.h"
@@ -142,7 +143,8 @@ TEST_F(Terrain, LayerJsonListsWhatIsAvailable) {
   EXPECT_EQ(layer["scheme"], "tms");
   EXPECT_EQ(layer["projection"], "EPSG:4326");
   EXPECT_EQ(layer["maxzoom"], 7);
-  EXPECT_EQ(layer["extensions"], nlohmann::json({"octvertexnormals"}));
+  EXPECT_EQ(layer["extensions"], nlohmann::json({"octvertexnormals", "metadata"}));
+  EXPECT_EQ(layer["metadataAvailability"], 10);
   ASSERT_EQ(layer["available"].size(), 8u);
   for (int level = 0; level <= 7; ++level) {
     size_t listed = 0;
@@ -159,6 +161,36 @@ TEST_F(Terrain, LayerJsonListsWhatIsAvailable) {
   EXPECT_FALSE(t.available({8, 0, 0}));
   EXPECT_FALSE(t.available({1, 4, 0}));
   EXPECT_FALSE(t.tile({3, 0, 0}).has_value()) << "no data there";
+}
+
+// Every tenth level's tiles carry the `metadata` extension: what is
+// available in the ten levels below each (CesiumJS reads availability there).
+TEST_F(Terrain, RootTilesMetadataListsTheLevelsBelowThem) {
+  const TerrainTiler t = tiler();
+  std::vector<std::set<TerrainKey>> listed(11);
+  for (const TerrainKey root : {TerrainKey{0, 0, 0}, TerrainKey{0, 1, 0}}) {
+    const DecodedMesh m = decode(t, root);
+    ASSERT_FALSE(m.metadata.empty()) << root.to_string();
+    const auto available = nlohmann::json::parse(m.metadata)["available"];
+    ASSERT_EQ(available.size(), 10u);
+    for (size_t k = 0; k < available.size(); ++k) {
+      const int level = static_cast<int>(k) + 1;
+      for (const auto& r : available[k]) {
+        for (uint32_t y = r["startY"]; y <= r["endY"]; ++y) {
+          for (uint32_t x = r["startX"]; x <= r["endX"]; ++x) {
+            EXPECT_EQ(x >> level, root.x) << "inside the root's subtree";
+            listed[level].insert({level, x, y});
+          }
+        }
+      }
+    }
+  }
+  for (int level = 1; level <= 10; ++level) {
+    const auto keys = t.available_tiles(level);
+    EXPECT_EQ(listed[level], std::set<TerrainKey>(keys.begin(), keys.end())) << level;
+  }
+  EXPECT_TRUE(decode(t, t.available_tiles(10).front()).metadata.empty())
+      << "the finest level has nothing below it";
 }
 
 TEST_F(Terrain, ExportWritesEveryAvailableTileAndLayerJson) {

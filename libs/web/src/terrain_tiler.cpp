@@ -2,11 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
-#include <map>
 
 #include <fmt/format.h>
-#include <nlohmann/json.hpp>
 
+#include "availability.h"
 #include "relief/tiles/store.h"
 #include "relief/web/quantized_mesh.h"
 #include "relief/web/rtin.h"
@@ -115,9 +114,7 @@ struct TerrainTiler::Impl {
   geo::TileKey quad_of(const TerrainKey& k) const {
     return {k.level, k.x >> 1, (1u << k.level) - 1 - k.y};
   }
-  bool meets_bbox(const TerrainKey& k) const {
-    return !options.bbox || k.bounds().intersects(*options.bbox);
-  }
+  bool meets_bbox(const TerrainKey& k) const { return meets(k, options.bbox); }
 
   // The errors of a tile's lattice alone, kept for its neighbours: each
   // tile's are needed by itself and its 4 neighbours.
@@ -217,6 +214,11 @@ Result<std::vector<std::byte>> TerrainTiler::Impl::tile(const TerrainKey& key) c
         std::sqrt(normal.x * normal.x + normal.y * normal.y + normal.z * normal.z);
     in.normals[i] = {normal.x / length, normal.y / length, normal.z / length};
   }
+  // Tiles of every tenth level say what is available in the ten levels
+  // below them (CesiumJS's metadataAvailability).
+  if (key.level % kMetadataLevels == 0 && key.level < max_level) {
+    in.metadata_json = metadata_json(*store, key, max_level, options.bbox);
+  }
   return gzip(encode_quantized_mesh(in));
 }
 
@@ -259,90 +261,12 @@ bool TerrainTiler::available(const TerrainKey& key) const {
 }
 
 std::vector<TerrainKey> TerrainTiler::available_tiles(int level) const {
-  std::vector<TerrainKey> keys;
-  if (level == 0) return {{0, 0, 0}, {0, 1, 0}};
-  if (level < 0 || level > impl_->max_level) return keys;
-  for (const tiles::IndexEntry& e : impl_->store->index(level).entries()) {
-    const uint32_t y = (1u << level) - 1 - e.key.y;
-    for (const uint32_t x : {2 * e.key.x, 2 * e.key.x + 1}) {
-      const TerrainKey key{level, x, y};
-      if (impl_->meets_bbox(key)) keys.push_back(key);
-    }
-  }
-  std::sort(keys.begin(), keys.end(), [](const TerrainKey& a, const TerrainKey& b) {
-    return std::tie(a.y, a.x) < std::tie(b.y, b.x);
-  });
-  return keys;
+  return web::available_tiles(*impl_->store, level, impl_->max_level, impl_->options.bbox);
 }
-
-namespace {
-
-// Availability as rectangles: runs of columns per row, a run continued
-// while the rows above repeat it.
-nlohmann::json ranges_of(const std::vector<TerrainKey>& keys) {
-  struct Range {
-    uint32_t start_x, end_x, start_y, end_y;
-  };
-  std::vector<Range> done;
-  std::map<std::pair<uint32_t, uint32_t>, Range> open;  // by (start_x, end_x)
-  size_t i = 0;
-  while (i < keys.size()) {
-    const uint32_t y = keys[i].y;
-    std::map<std::pair<uint32_t, uint32_t>, Range> next;
-    while (i < keys.size() && keys[i].y == y) {
-      const uint32_t start = keys[i].x;
-      uint32_t end = start;
-      while (i + 1 < keys.size() && keys[i + 1].y == y && keys[i + 1].x == end + 1) ++i, ++end;
-      ++i;
-      auto it = open.find({start, end});
-      if (it != open.end() && it->second.end_y + 1 == y) {
-        Range r = it->second;
-        r.end_y = y;
-        next[{start, end}] = r;
-        open.erase(it);
-      } else {
-        next[{start, end}] = Range{start, end, y, y};
-      }
-    }
-    for (auto& [_, r] : open) done.push_back(r);
-    open = std::move(next);
-  }
-  for (auto& [_, r] : open) done.push_back(r);
-  nlohmann::json out = nlohmann::json::array();
-  for (const Range& r : done) {
-    out.push_back(
-        {{"startX", r.start_x}, {"startY", r.start_y}, {"endX", r.end_x}, {"endY", r.end_y}});
-  }
-  return out;
-}
-
-}  // namespace
 
 std::string TerrainTiler::layer_json(const std::string& name) const {
-  const geo::GeoBox& e = impl_->store->manifest().extent;
-  nlohmann::json available = nlohmann::json::array();
-  for (int level = 0; level <= impl_->max_level; ++level)
-    available.push_back(ranges_of(available_tiles(level)));
-  nlohmann::json layer = {
-      {"tilejson", "2.1.0"},
-      {"name", name},
-      {"description", "relief terrain: quantized-mesh tiles of an elevation store"},
-      {"version", "1.0.0"},
-      {"format", "quantized-mesh-1.0"},
-      {"scheme", "tms"},
-      {"projection", "EPSG:4326"},
-      {"tiles", {"{z}/{x}/{y}.terrain"}},
-      {"bounds",
-       {std::max(e.west, -180.0), std::max(e.south, -90.0), std::min(e.east, 180.0),
-        std::min(e.north, 90.0)}},
-      {"minzoom", 0},
-      {"maxzoom", impl_->max_level},
-      {"attribution", ""},
-      {"extensions",
-       impl_->options.normals ? nlohmann::json{"octvertexnormals"} : nlohmann::json::array()},
-      {"available", available},
-  };
-  return layer.dump();
+  return web::layer_json(*impl_->store, name, impl_->max_level, impl_->options.bbox,
+                         impl_->options.normals);
 }
 
 Result<std::vector<std::byte>> TerrainTiler::tile(const TerrainKey& key) const {
