@@ -142,8 +142,9 @@ TEST_F(ServePages, ServesTheWebRootAndNamesWhatIsMissing) {
   ::kill(pid, SIGTERM);
   ::waitpid(pid, nullptr, 0);
 
-  // Stopped by timeout's SIGTERM after a second: its stderr says what is missing.
-  const auto run = testing::run_relief(args, "timeout -s TERM 1");
+  // Stopped by timeout's SIGTERM after 2 s (time to start under a sanitizer): its stderr says what
+  // is missing.
+  const auto run = testing::run_relief(args, "timeout -s TERM 2");
   EXPECT_EQ(run.exit_code, 124) << run.err;
   for (const char* missing : {"/lib/cesium/ answers 404", "/lib/maplibre/ answers 404"}) {
     const size_t at = run.err.find(missing);
