@@ -14,6 +14,7 @@ packages=(
   libopenmpi-dev openmpi-bin                                             # cluster rendering (libs/parallel)
   ferret-datasets                                                        # ETOPO5, the whole-Earth DEM of the main job
   clang-19 libclang-rt-19-dev  # fuzz/: libFuzzer (clang >= 16 compiles <expected>)
+  chromium                     # the browser test of relief serve's /view/ (tests/web/browser_test.cpp)
 )
 # Node.js runs the web tests' independent decoders (CesiumJS, loaders.gl) and
 # drives the browser; the machine image brings node 20 from NodeSource. Only
@@ -29,6 +30,10 @@ if ((${#missing[@]})); then
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -q --no-install-recommends "${missing[@]}"
 fi
 
-# The web tests' JavaScript packages, exact versions from the committed
-# package-lock.json (the npm registry; no download at test time).
+# JavaScript packages, exact versions from the committed package-lock.json
+# files (the npm registry; no download at test time): the libraries relief
+# serve's pages load (web/, served under /lib/) and the web tests' decoders
+# and browser driver (tests/web/js; puppeteer-core drives Debian's chromium
+# and downloads no browser).
+npm ci --prefix web --no-audit --no-fund --loglevel=error
 npm ci --prefix tests/web/js --no-audit --no-fund --loglevel=error

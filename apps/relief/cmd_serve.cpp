@@ -1,5 +1,6 @@
 #include <csignal>
 #include <cstdio>
+#include <filesystem>
 
 #include <fmt/format.h>
 
@@ -16,6 +17,7 @@ namespace {
 constexpr const char* kServeHelp =
     R"(usage: relief serve STORE [--port P] [--bind ADDR] [--threads N] [--share I/N]
                     [--max-connections N] [--read-timeout S] [--write-timeout S]
+                    [--web-root DIR]
 
 Serves a store read-only over HTTP/1.1 until interrupted: only the store's own
 files (manifest.json, level indices, tiles) by their canonical paths, GET and
@@ -27,6 +29,9 @@ Any static web server (nginx, ...) serving the store directory works the same.
 An elevation store is also served to web clients (docs/web.md), tiles made on
 request and cached:
   /terrain/layer.json, /terrain/{z}/{x}/{y}.terrain   Cesium quantized-mesh
+and the pages that show it, with the libraries they load, from a web root:
+  /view/#camera=LON,LAT,H,HEADING,PITCH,ROLL[&fov=DEG]   CesiumJS viewer
+  /lib/cesium/..., /lib/maplibre/...                     the npm packages
 
 options:
   --port P       TCP port (default 8080; 0: any free port, printed)
@@ -43,7 +48,32 @@ options:
                  the connection opening or the previous answer (default 10)
   --write-timeout S    an answer making no progress for S seconds is dropped
                  (default 10)
+  --web-root DIR the pages' folder: view/ and node_modules/ as scripts/setup.sh
+                 lays them out (npm ci --prefix web). Default: the source
+                 tree's web/ when it exists, else the installed
+                 share/relief/web; without one, /view/ gets 404
 )";
+
+// The web root: --web-root, else the source tree's web/ (a relief run from
+// its build tree), else the installed copy; empty (with a note on stderr)
+// when there is none, so the store is still served.
+Result<std::filesystem::path> find_web_root(const std::optional<std::string>& given) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (given) {
+    if (!fs::is_directory(*given, ec)) {
+      return fail(fmt::format("serve: --web-root {}: not a directory", *given));
+    }
+    return fs::path(*given);
+  }
+  for (const fs::path candidate : {RELIEF_SOURCE_WEB_DIR, RELIEF_INSTALLED_WEB_DIR}) {
+    if (fs::is_regular_file(candidate / "view/index.html", ec)) return candidate;
+  }
+  std::fprintf(stderr, "relief serve: no web root (--web-root DIR, %s or %s): /view/ answers 404\n",
+               RELIEF_SOURCE_WEB_DIR, RELIEF_INSTALLED_WEB_DIR);
+  return fs::path();
+}
+
 }  // namespace
 
 int run_serve(const std::vector<std::string>& argv) {
@@ -56,7 +86,8 @@ int run_serve(const std::vector<std::string>& argv) {
                            {"--max-connections"},
                            {"--read-timeout"},
                            {"--write-timeout"},
-                           {"--share"}},
+                           {"--share"},
+                           {"--web-root"}},
                           "serve");
   if (!args) return report_error(args.error().message);
   if (args->positional().size() != 1) return report_error("serve: expected exactly one STORE");
@@ -92,17 +123,30 @@ int run_serve(const std::vector<std::string>& argv) {
     }
     *timeout = std::chrono::milliseconds(static_cast<int64_t>(**seconds * 1000));
   }
-  std::shared_ptr<web::WebService> web;
+  auto web_root = find_web_root(args->get("--web-root"));
+  if (!web_root) return report_error(web_root.error().message);
+  web::WebServiceOptions web_options;
+  web_options.name = o.root.filename().empty() ? o.root.parent_path().filename().string()
+                                               : o.root.filename().string();
+  if (!web_root->empty()) {
+    web_options.pages = web::web_root_mounts(*web_root);
+    for (const auto& mount : web_options.pages) {
+      if (std::filesystem::is_directory(mount.dir)) continue;
+      std::fprintf(stderr,
+                   "relief serve: %s is missing: %s answers 404 (scripts/setup.sh installs it "
+                   "with npm ci --prefix web)\n",
+                   mount.dir.c_str(), mount.prefix.c_str());
+    }
+  }
+  std::shared_ptr<const web::TerrainTiler> terrain;
   if (auto store = tiles::Store::open(o.root);
       store && store->manifest().kind == tiles::DatasetKind::Elevation) {
-    const std::string name = o.root.filename().empty() ? o.root.parent_path().filename().string()
-                                                       : o.root.filename().string();
-    auto terrain =
-        web::TerrainTiler::create(std::make_shared<const tiles::Store>(std::move(*store)));
-    if (!terrain) return report_error(terrain.error().message);
-    web = std::make_shared<web::WebService>(
-        std::make_shared<const web::TerrainTiler>(std::move(*terrain)),
-        web::WebServiceOptions{.name = name});
+    auto tiler = web::TerrainTiler::create(std::make_shared<const tiles::Store>(std::move(*store)));
+    if (!tiler) return report_error(tiler.error().message);
+    terrain = std::make_shared<const web::TerrainTiler>(std::move(*tiler));
+  }
+  if (terrain || !web_options.pages.empty()) {
+    auto web = std::make_shared<web::WebService>(terrain, std::move(web_options));
     o.generate = [web](std::string_view target) -> std::optional<serve::GeneratedAnswer> {
       auto a = web->answer(target);
       if (!a) return std::nullopt;
@@ -122,6 +166,10 @@ int run_serve(const std::vector<std::string>& argv) {
   std::printf("serving %s on http://%s:%d/", o.root.c_str(), o.bind.c_str(), (*server)->port());
   if (o.share_count > 1) std::printf(" (share %u/%u)", o.share_index, o.share_count);
   std::printf("\n");
+  if (!web_root->empty()) {
+    std::printf("pages from %s: http://%s:%d/view/\n", web_root->c_str(), o.bind.c_str(),
+                (*server)->port());
+  }
   std::fflush(stdout);
   int signal = 0;
   sigwait(&stop_signals, &signal);

@@ -7,9 +7,7 @@
 #include <signal.h>
 #include <sys/wait.h>
 
-#include <cstdio>
 #include <nlohmann/json.hpp>
-#include <random>
 
 #include "qm_decoder.h"
 #include "relief/base/file_io.h"
@@ -18,24 +16,12 @@
 #include "relief/web/terrain_tiler.h"
 #include "servers.h"
 #include "test_support.h"
+#include "web_js.h"
 
 namespace relief::web {
 namespace {
 
 namespace fs = std::filesystem;
-
-std::string run_node(const std::vector<std::string>& args, int& status) {
-  std::string command = "node";
-  for (const auto& a : args) command += " '" + a + "'";
-  std::string out;
-  FILE* pipe = popen(command.c_str(), "r");
-  if (!pipe) return out;
-  char buffer[65536];
-  size_t n;
-  while ((n = fread(buffer, 1, sizeof buffer, pipe)) > 0) out.append(buffer, n);
-  status = pclose(pipe);
-  return out;
-}
 
 class IndependentDecoders : public testing::SmallStoreSuite {
  protected:
@@ -77,32 +63,15 @@ class IndependentDecoders : public testing::SmallStoreSuite {
     auto tiler = TerrainTiler::create(shared);
     ASSERT_TRUE(tiler.has_value());
     const int level = tiler->max_level();
-    const double d = s.grid().sample_spacing(level);
     const auto keys = tiler->available_tiles(level);
 
     // Points on lattice corners (as the 16-bit u, v place them), expected
     // heights the mean of the 4 samples around each, read from the store.
-    std::mt19937 random(42);
     nlohmann::json request = {{"level", level}, {"points", nlohmann::json::array()}};
     std::vector<double> expected;
-    while (expected.size() < 20) {
-      const TerrainKey k = keys[random() % keys.size()];
-      const int p = 1 + static_cast<int>(random() % 255), q = 1 + static_cast<int>(random() % 255);
-      const geo::GeoBox b = k.bounds();
-      const double lon = b.west + ((p * 32767 + 128) >> 8) / 32767.0 * b.width();
-      const double lat = b.south + (((256 - q) * 32767 + 128) >> 8) / 32767.0 * b.height();
-      double sum = 0;
-      int valid = 0;
-      for (const double dx : {-d / 2, d / 2}) {
-        for (const double dy : {-d / 2, d / 2}) {
-          auto v = s.sample(lon + dx, lat + dy, level);
-          ASSERT_TRUE(v.has_value());
-          if (*v) sum += **v, ++valid;
-        }
-      }
-      if (valid < 4) continue;
-      request["points"].push_back({lon, lat});
-      expected.push_back(sum / 4);
+    for (const auto& p : testing::random_lattice_points(s, *tiler, level, 20, 42)) {
+      request["points"].push_back({p.lon, p.lat});
+      expected.push_back(p.height);
     }
     std::vector<TerrainKey> tiles = {{0, 0, 0}, {0, 1, 0}, keys.front(), keys.back()};
     tiles.push_back(tiler->available_tiles(6).front());
@@ -112,9 +81,9 @@ class IndependentDecoders : public testing::SmallStoreSuite {
 
     int status = -1;
     const std::string text =
-        run_node({(fs::path(RELIEF_WEB_JS_DIR) / "decode_terrain.cjs").string(), source,
-                  (dir / "request.json").string()},
-                 status);
+        testing::run_node({(fs::path(RELIEF_WEB_JS_DIR) / "decode_terrain.cjs").string(), source,
+                           (dir / "request.json").string()},
+                          status);
     ASSERT_EQ(status, 0) << text;
     const auto result = nlohmann::json::parse(text);
     EXPECT_EQ(result["cesiumVersion"], "1.140.0");

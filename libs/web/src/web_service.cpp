@@ -51,12 +51,14 @@ struct WebService::Impl {
   mutable LruCache<TerrainKey, std::string, TerrainKeyHash> tiles;
   mutable InFlight in_flight;
   mutable std::atomic<uint64_t> made{0};
+  StaticFiles pages;
 
   Impl(std::shared_ptr<const TerrainTiler> t, WebServiceOptions o)
       : terrain(std::move(t)),
         options(std::move(o)),
-        layer_json(terrain->layer_json(options.name)),
-        tiles(options.cache_bytes, [](const std::string& s) { return s.size() + 64; }) {}
+        layer_json(terrain ? terrain->layer_json(options.name) : std::string()),
+        tiles(options.cache_bytes, [](const std::string& s) { return s.size() + 64; }),
+        pages(options.pages) {}
 
   std::optional<WebAnswer> terrain_tile(std::string_view rest) const {
     const auto path = parse_tile_path(rest, ".terrain");
@@ -89,7 +91,8 @@ WebService::~WebService() = default;
 
 std::optional<WebAnswer> WebService::answer(std::string_view target) const {
   const std::string_view path = target_path(target);
-  if (!path.starts_with(kTerrain)) return std::nullopt;
+  if (!path.starts_with(kTerrain)) return impl_->pages.answer(path);
+  if (!impl_->terrain) return std::nullopt;
   const std::string_view rest = path.substr(kTerrain.size());
   if (rest == "layer.json") return WebAnswer{"application/json", "", impl_->layer_json};
   return impl_->terrain_tile(rest);

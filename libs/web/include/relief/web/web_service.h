@@ -1,31 +1,32 @@
 #pragma once
 // The web side of `relief serve` (docs/web.md): answers for the routes web
 // clients read, tiles made on request and kept, encoded, in a byte-budgeted
-// cache; concurrent requests for one tile make it once.
+// cache; concurrent requests for one tile make it once; and the pages that
+// show them, as plain files of a web root.
 //   /terrain/layer.json, /terrain/{z}/{x}/{y}.terrain   Cesium quantized-mesh
+//   /view/, /lib/cesium/..., /lib/maplibre/...         pages and libraries
 #include <cstdint>
 #include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
+#include "relief/web/static_files.h"
 #include "relief/web/terrain_tiler.h"
+#include "relief/web/web_answer.h"
 
 namespace relief::web {
-
-struct WebAnswer {
-  std::string content_type;
-  std::string content_encoding;  // "gzip" for .terrain bodies
-  std::string body;
-};
 
 struct WebServiceOptions {
   std::string name = "relief";                // the tileset's name in layer.json
   uint64_t cache_bytes = uint64_t{64} << 20;  // encoded tiles kept
+  std::vector<StaticMount> pages;             // web_root_mounts(root); empty: no pages
 };
 
 class WebService {
  public:
+  // `terrain` may be null (a store that is no elevation): no /terrain/ routes.
   WebService(std::shared_ptr<const TerrainTiler> terrain, WebServiceOptions options = {});
   ~WebService();
   // The answer for a request target, nullopt when it names nothing here (or
