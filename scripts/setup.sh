@@ -5,7 +5,7 @@ packages=(
   build-essential cmake ninja-build ccache pkg-config git zip clang-format time python3
   libgdal-dev gdal-bin python3-gdal
   libegl-dev libgl-dev libopengl-dev libegl-mesa0 libgl1-mesa-dri
-  nginx-light apache2-utils libcurl4-openssl-dev
+  nginx-light apache2-utils wrk libcurl4-openssl-dev
   libzstd-dev libjemalloc-dev liblerc-dev libpng-dev libturbojpeg0-dev libwebp-dev
   nlohmann-json3-dev libfmt-dev libgtest-dev
   otb-bin

@@ -71,6 +71,19 @@ Result<tiles::Store> fuse_elevation_options(const Args& args, const std::string&
   return pipeline::fuse_elevation_layers(std::move(layers), mode, executor, std::move(weights));
 }
 
+Result<tiles::Store> open_elevation(const Args& args, const std::string& path,
+                                    pipeline::ElevationProcessing elevation,
+                                    const StoreAccess& access,
+                                    std::shared_ptr<net::DiskCache>* disk_cache) {
+  tiles::Store store =
+      RELIEF_TRY(open_kind(path, tiles::DatasetKind::Elevation, "STORE", access, disk_cache));
+  store = RELIEF_TRY(fuse_elevation_options(args, path, std::move(store), access));
+  if (elevation.empty()) return store;
+  ThreadExecutor executor;
+  const std::string name = store.root().string();
+  return pipeline::process_elevation(std::move(store), name, std::move(elevation), executor);
+}
+
 Result<LayerOptions> take_layer_options(std::vector<std::string>& argv) {
   LayerOptions layers;
   layers.textures = RELIEF_TRY(take_texture_layers(argv));
@@ -170,16 +183,8 @@ Result<RenderSetup> parse_render_setup(const Args& args, TextureLayers textures,
   }
   s.has_elevation = !args.positional().empty();
   if (s.has_elevation) {
-    s.store = RELIEF_TRY(open_kind(args.positional()[0], tiles::DatasetKind::Elevation, "STORE",
-                                   access, &s.disk_cache));
-    s.store =
-        RELIEF_TRY(fuse_elevation_options(args, args.positional()[0], std::move(s.store), access));
-    if (!elevation.empty()) {
-      ThreadExecutor executor;
-      const std::string name = s.store.root().string();
-      s.store = RELIEF_TRY(
-          pipeline::process_elevation(std::move(s.store), name, std::move(elevation), executor));
-    }
+    s.store = RELIEF_TRY(
+        open_elevation(args, args.positional()[0], std::move(elevation), access, &s.disk_cache));
   } else if (!args.get_all("--elevation").empty()) {
     return fail("--elevation: fuses with an elevation STORE, and none was given");
   } else if (!elevation.empty()) {

@@ -74,6 +74,15 @@ inline const tiles::Store* elevation_of(const RenderSetup& s) {
 Result<tiles::Store> fuse_elevation_options(const Args& args, const std::string& first_name,
                                             tiles::Store first, const StoreAccess& access = {});
 
+// The elevation STORE as `relief render` draws it: --elevation layers fused
+// (fuse_elevation_options) and the --elevation-op chain applied. What
+// `relief export --format quantized-mesh` and `relief serve` give web
+// clients too.
+Result<tiles::Store> open_elevation(const Args& args, const std::string& path,
+                                    pipeline::ElevationProcessing elevation,
+                                    const StoreAccess& access = {},
+                                    std::shared_ptr<net::DiskCache>* disk_cache = nullptr);
+
 // Scene options of a setup: selection (imagery sets the texture level), mesh,
 // GPU budget, drawing.
 view::SceneOptions scene_options(const RenderSetup& setup);
