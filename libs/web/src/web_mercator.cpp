@@ -9,7 +9,7 @@
 namespace relief::web {
 
 bool XyzKey::valid() const {
-  return z >= 0 && z <= 30 && x < (1u << z) && y < (1u << z);
+  return z >= 0 && z <= kMaxZoom && x < (1u << z) && y < (1u << z);
 }
 
 geo::GeoBox XyzKey::bounds() const {

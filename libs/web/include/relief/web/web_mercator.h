@@ -16,12 +16,14 @@ namespace relief::web {
 
 // The latitude of the top edge of tile (0, 0, 0): the square world's edge.
 inline constexpr double kMercatorMaxLatitude = 85.051128779806592;
+// Zooms beyond have pixels of less than a millimetre; x and y fit 32 bits.
+inline constexpr int kMaxZoom = 30;
 
 struct XyzKey {
   int z = 0;
   uint32_t x = 0, y = 0;
   auto operator<=>(const XyzKey&) const = default;
-  bool valid() const;
+  bool valid() const;  // z in [0, kMaxZoom], x and y in [0, 2^z)
   geo::GeoBox bounds() const;
   std::string to_string() const;  // "z/x/y"
 };
