@@ -1,12 +1,14 @@
 // XYZ imagery tiles of an imagery store (data/imagery/RGB.byte.tif): pixels
 // checked against the bilinear colour of the store's own samples, read
-// tile by tile here; transparent where the store has no data.
+// tile by tile here; transparent where the store has no data. The export.
 #include <gtest/gtest.h>
 
 #include <map>
+#include <nlohmann/json.hpp>
 #include <random>
 
 #include "expected_heights.h"
+#include "relief/base/file_io.h"
 #include "relief/tiles/codec.h"
 #include "relief/tiles/store.h"
 #include "relief/web/raster_tiles.h"
@@ -108,6 +110,41 @@ TEST_F(RasterImagery, PixelsAreBilinearColoursAndTransparentOutsideTheData) {
   }
   EXPECT_GT(opaque, 200) << transparent;
   EXPECT_GT(transparent, 200) << opaque;
+}
+
+TEST_F(RasterImagery, ExportXyzAndRefuseHeightFormats) {
+  testing::ScratchDir dir("web_imagery_export");
+  const fs::path out = dir / "xyz";
+  auto r = testing::run_relief(
+      {"export", store_path().string(), "--format", "xyz", "-o", out.string(), "-q"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  auto text = read_text_file(out / "tiles.json", 1 << 20);
+  ASSERT_TRUE(text.has_value());
+  const auto j = nlohmann::json::parse(*text);
+  EXPECT_EQ(j["maxzoom"], 9);
+  EXPECT_FALSE(j.contains("encoding"));
+  auto opened = tiles::Store::open(store_path());
+  ASSERT_TRUE(opened.has_value());
+  auto tiler = RasterTiler::create(std::make_shared<const tiles::Store>(std::move(*opened)));
+  ASSERT_TRUE(tiler.has_value());
+  size_t files = 0;
+  for (int z = 0; z <= 9; ++z) {
+    for (const XyzKey& k : tiler->available_tiles(z)) {
+      auto bytes = read_file(out / (k.to_string() + ".png"), 1 << 24);
+      ASSERT_TRUE(bytes.has_value()) << k.to_string();
+      EXPECT_EQ(*bytes, *tiler->imagery_png_tile(k)) << k.to_string();
+      ++files;
+    }
+  }
+  EXPECT_EQ(files + 1, testing::regular_files_under(out));
+
+  for (const char* format : {"terrain-rgb", "terrarium"}) {
+    EXPECT_TRUE(
+        testing::is_one_line_error(testing::run_relief({"export", store_path().string(), "--format",
+                                                        format, "-o", (dir / "dem").string()}),
+                                   std::string("--format ") + format));
+  }
+  EXPECT_FALSE(fs::exists(dir / "dem"));
 }
 
 }  // namespace
