@@ -4,7 +4,6 @@
 // packages pinned by package-lock.json and installed by scripts/setup.sh).
 #include <gtest/gtest.h>
 
-#include <cstdio>
 #include <nlohmann/json.hpp>
 #include <random>
 
@@ -13,6 +12,7 @@
 #include "relief/tiles/store.h"
 #include "relief/web/quantized_mesh.h"
 #include "relief/web/terrain_tiler.h"
+#include "run_node.h"
 #include "test_support.h"
 
 namespace relief::web {
@@ -20,18 +20,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string run_node(const std::vector<std::string>& args, int& status) {
-  std::string command = "node";
-  for (const auto& a : args) command += " '" + a + "'";
-  std::string out;
-  FILE* pipe = popen(command.c_str(), "r");
-  if (!pipe) return out;
-  char buffer[65536];
-  size_t n;
-  while ((n = fread(buffer, 1, sizeof buffer, pipe)) > 0) out.append(buffer, n);
-  status = pclose(pipe);
-  return out;
-}
+using testing::run_node;
 
 class IndependentDecoders : public testing::SmallStoreSuite {
  protected:
