@@ -7,6 +7,8 @@
 #include <limits>
 #include <numbers>
 
+#include <fmt/format.h>
+
 namespace relief::web {
 namespace {
 
@@ -54,6 +56,16 @@ Result<Window<Sample>> read_window(const BlockReader<Sample>& blocks, const Resa
   if (columns.first > columns.last || rows.first > rows.last) return w;
   w.c0 = columns.first, w.r0 = rows.first;
   w.width = columns.last - columns.first + 1, w.height = rows.last - rows.first + 1;
+  // At most 2^e samples a pixel when the rule's level is read (e the extra
+  // levels of high latitudes, 3 at 85°); far more only when a store whose
+  // min level is above the rule's is read at a small zoom.
+  constexpr int64_t kMaxSamples = int64_t{1} << 26;
+  if (w.width * w.height > kMaxSamples) {
+    return fail(
+        fmt::format("level {}: {} x {} samples for one web tile; the store's min level "
+                    "is too fine for this zoom",
+                    level, w.width, w.height));
+  }
   w.values = RELIEF_TRY(
       blocks.read(level, w.c0, w.r0, static_cast<int>(w.width), static_cast<int>(w.height)));
   return w;
