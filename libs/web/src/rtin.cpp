@@ -61,12 +61,14 @@ float triangle_error(std::span<const float> h, size_t size, int ax, int ay, int 
   const double gx = (db * vy - dc * uy) / det, gy = (dc * ux - db * vx) / det;
   const int x0 = std::min({ax, bx, cx}), x1 = std::max({ax, bx, cx});
   const int y0 = std::min({ay, by, cy}), y1 = std::max({ay, by, cy});
-  // Inside: on the same side of all three edges as the opposite vertex.
+  // Inside: on the same side of all three edges as the opposite vertex. In
+  // 64 bits: on a 257-point lattice a side is up to 2^16, and the products
+  // of two sides below overflow an int (UBSan saw -65536 * -65536).
   const auto side = [](int px, int py, int qx, int qy, int x, int y) {
-    return (qx - px) * (y - py) - (qy - py) * (x - px);
+    return int64_t{qx - px} * (y - py) - int64_t{qy - py} * (x - px);
   };
-  const int sa = side(bx, by, cx, cy, ax, ay), sb = side(cx, cy, ax, ay, bx, by),
-            sc = side(ax, ay, bx, by, cx, cy);
+  const int64_t sa = side(bx, by, cx, cy, ax, ay), sb = side(cx, cy, ax, ay, bx, by),
+                sc = side(ax, ay, bx, by, cx, cy);
   double worst = 0;
   for (int y = y0; y <= y1; ++y) {
     for (int x = x0; x <= x1; ++x) {
