@@ -19,6 +19,8 @@ constexpr const char* kExportHelp =
     R"(usage: relief export STORE --level L [--bbox W,S,E,N] [--memory SIZE] -o OUT.tif
        relief export STORE --format quantized-mesh [--max-level M] [--bbox W,S,E,N]
                      [--max-error METRES] [--threads N] -o DIR
+       relief export STORE --format terrain-rgb|terrarium|xyz [--tile-size 256|512]
+                     [--max-zoom Z] [--bbox W,S,E,N] [--threads N] -o DIR
 
 Reassembles tile interiors of one level into a GeoTIFF (EPSG:4326, the store's
 sample grid; NaN or alpha marks nodata). The box is snapped outwards to samples.
@@ -30,7 +32,18 @@ DIR/layer.json and DIR/{z}/{x}/{y}.terrain (gzip-compressed: serve them with
 "Content-Encoding: gzip", docs/web.md), every level up to M (default: the
 store's finest). Each mesh keeps the level's lattice within CesiumJS's error
 for the level (an eighth of it at the finest level) unless --max-error says
-otherwise. An earlier export at DIR is replaced when the new one is complete.
+otherwise.
+
+--format terrain-rgb and terrarium write the heights of an elevation store as
+Web Mercator XYZ PNG tiles for MapLibre's raster-dem sources (encoding "mapbox"
+or "terrarium"), --format xyz the colours of an imagery store:
+DIR/tiles.json and DIR/{z}/{x}/{y}.png, 256 pixels a side (or --tile-size
+512), zooms 0 to Z (default: the first zoom whose pixels all read the store's
+finest level; larger zooms are upsampled from it). Nodata is 0 m in a DEM,
+transparent in imagery.
+
+Web exports are written beside DIR and moved into place when complete; an
+earlier web export at DIR is replaced, anything else there is refused.
 )";
 
 Result<geo::GeoBox> parse_bbox(const std::string& text) {
@@ -58,17 +71,22 @@ int run_export(const std::vector<std::string>& argv) {
                            {"--format"},
                            {"--max-level"},
                            {"--max-error"},
-                           {"--threads"}},
+                           {"--threads"},
+                           {"--tile-size"},
+                           {"--max-zoom"}},
                           "export");
   if (!args) return report_error(args.error().message);
   if (args->positional().size() != 1) return report_error("export: expected exactly one STORE");
   if (auto format = args->get("--format"); format && *format != "geotiff") {
     return run_export_web(*args, *format);
   }
-  for (const char* web_only : {"--max-level", "--max-error", "--threads"}) {
+  for (const char* web_only :
+       {"--max-level", "--max-error", "--threads", "--tile-size", "--max-zoom"}) {
     if (args->has(web_only)) {
-      return report_error(
-          fmt::format("export: {} applies to --format quantized-mesh only", web_only));
+      return report_error(fmt::format(
+          "export: {} applies to the web formats only (quantized-mesh, terrain-rgb, terrarium, "
+          "xyz)",
+          web_only));
     }
   }
   ingest::ExportOptions o;

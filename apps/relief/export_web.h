@@ -1,6 +1,6 @@
 #pragma once
-// `relief export --format quantized-mesh`: web tiles written for any static
-// host (docs/web.md).
+// `relief export --format quantized-mesh|terrain-rgb|terrarium|xyz`: web
+// tiles written for any static host (docs/web.md).
 #include "args.h"
 
 namespace relief::cli {

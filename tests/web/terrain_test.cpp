@@ -255,12 +255,12 @@ TEST_F(Terrain, ExportRefusesBadArgumentsWithOneLineAndWritesNothing) {
   ASSERT_TRUE(write_text_file_atomic(dir / "file", "not an export").has_value());
   EXPECT_TRUE(
       testing::is_one_line_error(run({"--format", "quantized-mesh", "-o", (dir / "file").string()}),
-                                 "not an earlier terrain export"));
+                                 "not an earlier web tile export"));
   fs::create_directories(dir / "other");
   ASSERT_TRUE(write_text_file_atomic(dir / "other/notes.txt", "mine").has_value());
   EXPECT_TRUE(testing::is_one_line_error(
       run({"--format", "quantized-mesh", "-o", (dir / "other").string()}),
-      "not an earlier terrain export"));
+      "not an earlier web tile export"));
   EXPECT_TRUE(fs::exists(dir / "other/notes.txt"));
   EXPECT_FALSE(fs::exists(out));
   EXPECT_TRUE(testing::temporary_files(dir.path()).empty());

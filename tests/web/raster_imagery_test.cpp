@@ -1,0 +1,151 @@
+// XYZ imagery tiles of an imagery store (data/imagery/RGB.byte.tif): pixels
+// checked against the bilinear colour of the store's own samples, read
+// tile by tile here; transparent where the store has no data. The export.
+#include <gtest/gtest.h>
+
+#include <map>
+#include <nlohmann/json.hpp>
+#include <random>
+
+#include "expected_heights.h"
+#include "relief/base/file_io.h"
+#include "relief/tiles/codec.h"
+#include "relief/tiles/store.h"
+#include "relief/web/raster_tiles.h"
+#include "test_support.h"
+
+namespace relief::web {
+namespace {
+
+namespace fs = std::filesystem;
+using Colour = std::array<double, 4>;
+
+class RasterImagery : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new testing::ScratchDir("web_imagery");
+    ASSERT_EQ(testing::run_relief({"build", testing::data("imagery/RGB.byte.tif"), "--kind",
+                                   "imagery", "-o", store_path().string(), "-q"})
+                  .exit_code,
+              0);
+  }
+  static void TearDownTestSuite() {
+    delete dir_;
+    dir_ = nullptr;
+  }
+  static fs::path store_path() { return dir_->path() / "rgb"; }
+
+  // The store's sample at (lon, lat) of a level, tiles decoded once.
+  Colour sample(const tiles::Store& s, int level, double lon, double lat) {
+    const geo::SampleIndex at = s.grid().locate(level, lon, lat);
+    if (!s.has_tile(at.tile)) return {0, 0, 0, 0};
+    auto it = decoded_.find(at.tile);
+    if (it == decoded_.end()) {
+      auto tile = s.read_tile(at.tile);
+      EXPECT_TRUE(tile.has_value());
+      it = decoded_.emplace(at.tile, std::move(tile->raster)).first;
+    }
+    const int b = s.grid().border(), w = it->second.width();
+    const auto p = it->second.u8().subspan(
+        (static_cast<size_t>(at.j + b) * static_cast<size_t>(w) + at.i + b) * 4, 4);
+    return {double(p[0]), double(p[1]), double(p[2]), double(p[3])};
+  }
+
+ private:
+  static inline testing::ScratchDir* dir_ = nullptr;
+  std::map<geo::TileKey, tiles::Raster> decoded_;
+};
+
+TEST_F(RasterImagery, PixelsAreBilinearColoursAndTransparentOutsideTheData) {
+  auto opened = tiles::Store::open(store_path());
+  ASSERT_TRUE(opened.has_value());
+  auto store = std::make_shared<const tiles::Store>(std::move(*opened));
+  auto tiler = RasterTiler::create(store);
+  ASSERT_TRUE(tiler.has_value()) << tiler.error().message;
+  EXPECT_FALSE(tiler->holds_elevation());
+  EXPECT_EQ(tiler->max_zoom(), 9);  // level 8 at 23.6-25.6°: 8 + 1
+  EXPECT_FALSE(tiler->dem_png_tile({0, 0, 0}, DemEncoding::TerrainRgb).has_value());
+
+  std::mt19937 random(5);
+  int opaque = 0, transparent = 0;
+  for (const int z : {4, 7, 9}) {
+    auto keys = tiler->available_tiles(z);
+    std::shuffle(keys.begin(), keys.end(), random);
+    keys.resize(std::min<size_t>(keys.size(), 2));
+    for (const XyzKey& k : keys) {
+      SCOPED_TRACE(k.to_string());
+      auto png = tiler->imagery_png_tile(k);
+      ASSERT_TRUE(png.has_value());
+      auto image = tiles::decode(tiles::Codec::Png, *png, tiles::SampleType::UInt8, 4, 256, 256);
+      ASSERT_TRUE(image.has_value());
+      for (int n = 0; n < 1000; ++n) {
+        const int i = static_cast<int>(random() % 256), j = static_cast<int>(random() % 256);
+        const auto c = testing::pixel_centre(k.z, k.x, k.y, 256, i, j);
+        const int level = testing::level_for_pixel(*store, z, 256, c.lat);
+        const double d = store->grid().sample_spacing(level);
+        const double fx = (c.lon + 180) / d - 0.5, fy = (90 - c.lat) / d - 0.5;
+        const double x0 = std::floor(fx), y0 = std::floor(fy), tx = fx - x0, ty = fy - y0;
+        Colour expected{};
+        double alpha_sum = 0;
+        for (const int dc : {0, 1}) {
+          for (const int dr : {0, 1}) {
+            const Colour s =
+                sample(*store, level, -180 + (x0 + dc + 0.5) * d, 90 - (y0 + dr + 0.5) * d);
+            const double w = (dc ? tx : 1 - tx) * (dr ? ty : 1 - ty);
+            for (size_t ch = 0; ch < 4; ++ch) expected[ch] += w * s[ch];
+            alpha_sum += s[3];
+          }
+        }
+        const auto got = image->u8().subspan((static_cast<size_t>(j) * 256 + i) * 4, 4);
+        if (alpha_sum == 0) {
+          EXPECT_EQ(got[3], 0) << i << "," << j;
+          ++transparent;
+        } else if (alpha_sum == 4 * 255) {
+          for (size_t ch = 0; ch < 4; ++ch)
+            EXPECT_NEAR(got[ch], expected[ch], 0.5 + 1e-6) << i << "," << j << " channel " << ch;
+          ++opaque;
+        }
+      }
+    }
+  }
+  EXPECT_GT(opaque, 200) << transparent;
+  EXPECT_GT(transparent, 200) << opaque;
+}
+
+TEST_F(RasterImagery, ExportXyzAndRefuseHeightFormats) {
+  testing::ScratchDir dir("web_imagery_export");
+  const fs::path out = dir / "xyz";
+  auto r = testing::run_relief(
+      {"export", store_path().string(), "--format", "xyz", "-o", out.string(), "-q"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  auto text = read_text_file(out / "tiles.json", 1 << 20);
+  ASSERT_TRUE(text.has_value());
+  const auto j = nlohmann::json::parse(*text);
+  EXPECT_EQ(j["maxzoom"], 9);
+  EXPECT_FALSE(j.contains("encoding"));
+  auto opened = tiles::Store::open(store_path());
+  ASSERT_TRUE(opened.has_value());
+  auto tiler = RasterTiler::create(std::make_shared<const tiles::Store>(std::move(*opened)));
+  ASSERT_TRUE(tiler.has_value());
+  size_t files = 0;
+  for (int z = 0; z <= 9; ++z) {
+    for (const XyzKey& k : tiler->available_tiles(z)) {
+      auto bytes = read_file(out / (k.to_string() + ".png"), 1 << 24);
+      ASSERT_TRUE(bytes.has_value()) << k.to_string();
+      EXPECT_EQ(*bytes, *tiler->imagery_png_tile(k)) << k.to_string();
+      ++files;
+    }
+  }
+  EXPECT_EQ(files + 1, testing::regular_files_under(out));
+
+  for (const char* format : {"terrain-rgb", "terrarium"}) {
+    EXPECT_TRUE(
+        testing::is_one_line_error(testing::run_relief({"export", store_path().string(), "--format",
+                                                        format, "-o", (dir / "dem").string()}),
+                                   std::string("--format ") + format));
+  }
+  EXPECT_FALSE(fs::exists(dir / "dem"));
+}
+
+}  // namespace
+}  // namespace relief::web
