@@ -7,9 +7,9 @@
 #include "allocator.h"
 #include "args.h"
 #include "commands.h"
+#include "elevation_options.h"
 #include "relief/serve/store_server.h"
-#include "relief/tiles/store.h"
-#include "relief/web/web_service.h"
+#include "serve_web.h"
 
 namespace relief::cli {
 
@@ -17,7 +17,8 @@ namespace {
 constexpr const char* kServeHelp =
     R"(usage: relief serve STORE [--port P] [--bind ADDR] [--threads N] [--share I/N]
                     [--max-connections N] [--read-timeout S] [--write-timeout S]
-                    [--web-root DIR]
+                    [--web-root DIR] [--imagery STORE2] [--elevation STORE3
+                    [--fuse first|mean] [--weights W,..]] [--elevation-op OP ...]
 
 Serves a store read-only over HTTP/1.1 until interrupted: only the store's own
 files (manifest.json, level indices, tiles) by their canonical paths, GET and
@@ -27,10 +28,16 @@ connection has read and write deadlines.
 Any static web server (nginx, ...) serving the store directory works the same.
 
 An elevation store is also served to web clients (docs/web.md), tiles made on
-request and cached:
+request and cached, as relief render draws it (--elevation layers fused,
+--elevation-op applied; the store's own files stay as they are):
   /terrain/layer.json, /terrain/{z}/{x}/{y}.terrain   Cesium quantized-mesh
+  /terrain-rgb/{z}/{x}/{y}.png, /terrarium/...        MapLibre raster-dem
+and imagery (an imagery STORE, or --imagery STORE2):
+  /imagery/{z}/{x}/{y}.png                            Web Mercator XYZ
+each with its tiles.json;
 and the pages that show it, with the libraries they load, from a web root:
   /view/#camera=LON,LAT,H,HEADING,PITCH,ROLL[&fov=DEG]   CesiumJS viewer
+  /map/#camera=LON,LAT,H,HEADING,PITCH                    MapLibre GL JS map
   /lib/cesium/..., /lib/maplibre/...                     the npm packages
 
 options:
@@ -79,16 +86,15 @@ Result<std::filesystem::path> find_web_root(const std::optional<std::string>& gi
 int run_serve(const std::vector<std::string>& argv) {
   if (wants_help(argv)) return print_help(kServeHelp);
   give_up_huge_pages();
-  auto args = Args::parse(argv,
-                          {{"--port"},
-                           {"--bind"},
-                           {"--threads"},
-                           {"--max-connections"},
-                           {"--read-timeout"},
-                           {"--write-timeout"},
-                           {"--share"},
-                           {"--web-root"}},
-                          "serve");
+  // Repeatable and ordered: taken out before the other options are parsed.
+  std::vector<std::string> rest = argv;
+  auto elevation = take_elevation_processing(rest);
+  if (!elevation) return report_error(elevation.error().message);
+  std::vector<OptionSpec> specs = {
+      {"--port"},         {"--bind"},          {"--threads"}, {"--max-connections"},
+      {"--read-timeout"}, {"--write-timeout"}, {"--share"},   {"--web-root"}};
+  for (auto& spec : serve_web_options()) specs.push_back(spec);
+  auto args = Args::parse(rest, specs, "serve");
   if (!args) return report_error(args.error().message);
   if (args->positional().size() != 1) return report_error("serve: expected exactly one STORE");
   serve::ServeOptions o;
@@ -138,16 +144,11 @@ int run_serve(const std::vector<std::string>& argv) {
                    mount.dir.c_str(), mount.prefix.c_str());
     }
   }
-  std::shared_ptr<const web::TerrainTiler> terrain;
-  if (auto store = tiles::Store::open(o.root);
-      store && store->manifest().kind == tiles::DatasetKind::Elevation) {
-    auto tiler = web::TerrainTiler::create(std::make_shared<const tiles::Store>(std::move(*store)));
-    if (!tiler) return report_error(tiler.error().message);
-    terrain = std::make_shared<const web::TerrainTiler>(std::move(*tiler));
-  }
-  if (terrain || !web_options.pages.empty()) {
-    auto web = std::make_shared<web::WebService>(terrain, std::move(web_options));
-    o.generate = [web](std::string_view target) -> std::optional<serve::GeneratedAnswer> {
+  auto web =
+      make_web_service(*args, o.root.string(), std::move(*elevation), std::move(web_options));
+  if (!web) return report_error(web.error().message);
+  if (*web) {
+    o.generate = [web = *web](std::string_view target) -> std::optional<serve::GeneratedAnswer> {
       auto a = web->answer(target);
       if (!a) return std::nullopt;
       return serve::GeneratedAnswer{std::move(a->content_type), std::move(a->content_encoding),

@@ -14,6 +14,7 @@
 #include "relief/lod/camera.h"
 #include "relief/tiles/store.h"
 #include "relief/web/quantized_mesh.h"
+#include "relief/web/raster_tiles.h"
 #include "relief/web/terrain_tiler.h"
 #include "servers.h"
 #include "test_support.h"
@@ -52,6 +53,19 @@ void expect_vector(const nlohmann::json& got, const lod::Vec3& want, double tole
   EXPECT_NEAR(got[2].get<double>(), want.z, tolerance) << what;
 }
 
+// `relief serve STORE` with the repository's web root, for one test.
+struct ServedStore {
+  int port = testing::free_port(), pid = 0;
+  explicit ServedStore(const fs::path& store) {
+    pid = testing::spawn_relief(
+        {"serve", store.string(), "--port", std::to_string(port), "--web-root", RELIEF_WEB_ROOT});
+    testing::wait_for(port);
+  }
+  ~ServedStore() { ::kill(pid, SIGTERM), ::waitpid(pid, nullptr, 0); }
+  ServedStore(const ServedStore&) = delete;
+  ServedStore& operator=(const ServedStore&) = delete;
+};
+
 class BrowserView : public testing::SmallStoreSuite {
  protected:
   void SetUp() override {
@@ -83,14 +97,8 @@ TEST_F(BrowserView, CesiumShowsTheServedTerrainAsReliefRenderDoes) {
       testing::kNoMesaLeakReport);
   ASSERT_EQ(rendered.exit_code, 0) << rendered.err;
 
-  const int port = testing::free_port();
-  const int server = testing::spawn_relief(
-      {"serve", store().string(), "--port", std::to_string(port), "--web-root", RELIEF_WEB_ROOT});
-  const struct Stop {
-    int pid;
-    ~Stop() { ::kill(pid, SIGTERM), ::waitpid(pid, nullptr, 0); }
-  } stop{server};
-  testing::wait_for(port);
+  const ServedStore served(store());
+  const int port = served.port;
 
   nlohmann::json request = {{"url", "http://127.0.0.1:" + std::to_string(port) + "/view/#camera=" +
                                         kCamera + "&fov=" + std::to_string(kFov) + "&sky=" + sky},
@@ -167,6 +175,86 @@ TEST_F(BrowserView, CesiumShowsTheServedTerrainAsReliefRenderDoes) {
     fs::copy_file(dir / "relief.png", keep / "relief.png", fs::copy_options::overwrite_existing);
     fs::copy_file(dir / "cesium.png", keep / "cesium.png", fs::copy_options::overwrite_existing);
     ADD_FAILURE() << "terrain IoU " << iou << " < 0.95; frames kept in " << keep;
+  }
+}
+
+}  // namespace
+}  // namespace relief::web
+
+namespace relief::web {
+namespace {
+
+// The height of the Terrain-RGB tiles at a point, as MapLibre's DEM sampling
+// reads them: bilinear over the 4 pixels around it at zoom z, with pixel
+// (i, j)'s value at position (i, j) of the tile (MapLibre's DEMData puts it
+// at the pixel's corner, half a pixel from the centre relief computed it
+// for). Tolerance: the Terrain-RGB step, 0.1 m, and float arithmetic.
+struct DemExpectation {
+  double height = 0, tolerance = 0;
+};
+DemExpectation dem_height(const RasterTiler& tiler, int z, double lon, double lat) {
+  const int n = tiler.tile_size();
+  const double world = std::ldexp(1.0, z) * n;
+  const double gx = (lon + 180) / 360 * world;
+  const double gy = (1 - std::asinh(std::tan(lat * M_PI / 180)) / M_PI) / 2 * world;
+  const auto at = [&](int64_t px, int64_t py) {
+    const XyzKey key{z, static_cast<uint32_t>(px / n), static_cast<uint32_t>(py / n)};
+    auto heights = tiler.heights(key);
+    EXPECT_TRUE(heights.has_value()) << key.to_string();
+    return heights ? (*heights)[static_cast<size_t>(py % n) * n + static_cast<size_t>(px % n)]
+                   : 0.0;
+  };
+  const int64_t x0 = static_cast<int64_t>(std::floor(gx)),
+                y0 = static_cast<int64_t>(std::floor(gy));
+  const double fx = gx - x0, fy = gy - y0;
+  const double h00 = at(x0, y0), h10 = at(x0 + 1, y0), h01 = at(x0, y0 + 1),
+               h11 = at(x0 + 1, y0 + 1);
+  const double top = h00 + (h10 - h00) * fx, bottom = h01 + (h11 - h01) * fx;
+  return {top + (bottom - top) * fy, 0.11};
+}
+
+class BrowserMap : public BrowserView {};
+
+TEST_F(BrowserMap, MapLibreReadsTheServedTerrainRgbHeights) {
+  testing::ScratchDir dir("browser_map");
+  auto opened = tiles::Store::open(store());
+  ASSERT_TRUE(opened.has_value());
+  auto raster = RasterTiler::create(std::make_shared<const tiles::Store>(std::move(*opened)));
+  ASSERT_TRUE(raster.has_value());
+
+  const ServedStore served(store());
+  const int port = served.port;
+
+  // Low over the Pyrenees, looking down steeply: the ground near the
+  // centre is drawn from the finest DEM zoom.
+  const nlohmann::json request = {
+      {"url", "http://127.0.0.1:" + std::to_string(port) + "/map/#camera=1.5,42.45,9000,0,-70,0"},
+      {"width", kWidth},
+      {"height", kHeight},
+      {"timeoutMs", 120000},
+      {"count", 20},
+      {"radius", 0.01}};
+  ASSERT_TRUE(write_text_file_atomic(dir / "request.json", request.dump()).has_value());
+  int status = -1;
+  const std::string text = testing::run_node(
+      {(fs::path(RELIEF_WEB_JS_DIR) / "browser_map.cjs").string(), (dir / "request.json").string()},
+      status);
+  ASSERT_EQ(status, 0) << text;
+  const auto result = nlohmann::json::parse(text);
+  std::cout << "browser_map: zoom " << result["zoom"] << ", " << result["requests"]
+            << " tile requests, " << result["bytes"] << " bytes; timings (ms) " << result["timings"]
+            << "\n";
+  EXPECT_EQ(result["ready"], true);
+  EXPECT_EQ(result["terrain"], true);
+  EXPECT_GT(result["requests"].get<int>(), 0);
+  ASSERT_EQ(result["heights"].size(), 20u);
+  for (size_t i = 0; i < 20; ++i) {
+    const auto& p = result["points"][i];
+    ASSERT_TRUE(result["heights"][i].is_number()) << "point " << i << " has no height";
+    const auto want =
+        dem_height(*raster, raster->max_zoom(), p[0].get<double>(), p[1].get<double>());
+    EXPECT_NEAR(result["heights"][i].get<double>(), want.height, want.tolerance)
+        << "point " << i << " " << p;
   }
 }
 

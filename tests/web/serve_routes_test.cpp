@@ -149,3 +149,59 @@ TEST_F(ServeRoutes, ConcurrentRequestsForOneTileMakeItOnce) {
 
 }  // namespace
 }  // namespace relief::web
+
+namespace relief::web {
+namespace {
+
+TEST_F(ServeRoutes, TerrainRgbAndTerrariumTilesWithTheirTileJson) {
+  for (const std::string format : {"terrain-rgb", "terrarium"}) {
+    SCOPED_TRACE(format);
+    const Response description = get(port_, "/" + format + "/tiles.json");
+    ASSERT_EQ(description.status, 200);
+    const auto json = nlohmann::json::parse(description.body);
+    EXPECT_EQ(json["encoding"], format == "terrain-rgb" ? "mapbox" : "terrarium");
+    const Response tile = get(port_, "/" + format + "/10/516/378.png");
+    ASSERT_EQ(tile.status, 200);
+    EXPECT_EQ(tile.headers.at("content-type"), "image/png");
+    EXPECT_EQ(tile.body.substr(1, 3), "PNG");
+    EXPECT_EQ(tile.headers.count("content-encoding"), 0u);
+    EXPECT_EQ(get(port_, "/" + format + "/10/0/0.png").status, 404) << "outside the data";
+    EXPECT_EQ(get(port_, "/" + format + "/10/516/378.terrain").status, 404);
+  }
+  EXPECT_EQ(get(port_, "/imagery/tiles.json").status, 404) << "no imagery given";
+}
+
+// --imagery adds /imagery/; --elevation fuses layers into what web clients
+// get; a wrong kind is a one-line error.
+TEST_F(ServeRoutes, ImageryAndFusedElevationFromTheCommandLine) {
+  testing::ScratchDir dir("serve_imagery");
+  const std::string imagery = (dir / "imagery").string();
+  ASSERT_EQ(testing::run_relief({"build", testing::data("imagery/RGB.byte.tif"), "--kind",
+                                 "imagery", "-o", imagery, "-q"})
+                .exit_code,
+            0);
+  const int port = testing::free_port();
+  const int pid =
+      testing::spawn_relief({"serve", store().string(), "--port", std::to_string(port), "--imagery",
+                             imagery, "--elevation", store().string(), "--fuse", "mean"});
+  testing::wait_for(port);
+  const Response description = get(port, "/imagery/tiles.json");
+  EXPECT_EQ(description.status, 200);
+  const auto json = nlohmann::json::parse(description.body);
+  const int z = json["maxzoom"];
+  EXPECT_GT(z, 0);
+  EXPECT_EQ(get(port, "/terrain/layer.json").status, 200);
+  EXPECT_EQ(get(port, "/terrain/10/1032/753.terrain").status, 200);
+  ::kill(pid, SIGTERM);
+  ::waitpid(pid, nullptr, 0);
+
+  EXPECT_TRUE(testing::is_one_line_error(testing::run_relief({"serve", store().string(), "--port",
+                                                              "0", "--imagery", store().string()}),
+                                         "not imagery"));
+  EXPECT_TRUE(testing::is_one_line_error(
+      testing::run_relief({"serve", imagery, "--port", "0", "--elevation", store().string()}),
+      "--elevation"));
+}
+
+}  // namespace
+}  // namespace relief::web

@@ -105,14 +105,17 @@ TEST_F(StaticFilesTree, AnswersNothingElse) {
 
 TEST(StaticFilesMounts, WebRootLayout) {
   const auto mounts = web_root_mounts("/w");
-  ASSERT_EQ(mounts.size(), 3u);
+  ASSERT_EQ(mounts.size(), 4u);
   EXPECT_EQ(mounts[0].prefix, "/view/");
   EXPECT_EQ(mounts[0].dir, fs::path("/w/view"));
   EXPECT_EQ(mounts[0].index, "index.html");
-  EXPECT_EQ(mounts[1].prefix, "/lib/cesium/");
-  EXPECT_EQ(mounts[1].dir, fs::path("/w/node_modules/cesium/Build/Cesium"));
-  EXPECT_EQ(mounts[2].prefix, "/lib/maplibre/");
-  EXPECT_EQ(mounts[2].dir, fs::path("/w/node_modules/maplibre-gl/dist"));
+  EXPECT_EQ(mounts[1].prefix, "/map/");
+  EXPECT_EQ(mounts[1].dir, fs::path("/w/map"));
+  EXPECT_EQ(mounts[1].index, "index.html");
+  EXPECT_EQ(mounts[2].prefix, "/lib/cesium/");
+  EXPECT_EQ(mounts[2].dir, fs::path("/w/node_modules/cesium/Build/Cesium"));
+  EXPECT_EQ(mounts[3].prefix, "/lib/maplibre/");
+  EXPECT_EQ(mounts[3].dir, fs::path("/w/node_modules/maplibre-gl/dist"));
 }
 
 // relief serve with a web root whose libraries are not installed: the page

@@ -171,24 +171,28 @@
   slider.addEventListener("input", () => setExaggeration(Number(slider.value)));
   setExaggeration(fragment.exaggeration);
 
-  // Imagery, when the server has an /imagery/ layer (relief's geographic
-  // quadtree: level 0 is two 256-pixel tiles). Its absence is no error.
+  // Imagery, when the server has an /imagery/ layer (Web Mercator XYZ tiles
+  // described by its tiles.json). Its absence is no error.
   const imageryBox = document.getElementById("imagery");
   const imageryLabel = document.getElementById("imagery-label");
   let imagery = null;
-  fetch("/imagery/0/0/0.png", { method: "HEAD" }).then(
-    (r) => {
+  fetch("/imagery/tiles.json").then(
+    async (r) => {
       if (!r.ok) {
         imageryLabel.textContent = "Imagery (none served)";
         return;
       }
+      const description = await r.json();
+      const [west, south, east, north] = description.bounds;
       imageryBox.disabled = false;
       imageryBox.addEventListener("change", () => {
         if (imageryBox.checked) {
           imagery = viewer.imageryLayers.addImageryProvider(
             new Cesium.UrlTemplateImageryProvider({
               url: "/imagery/{z}/{x}/{y}.png",
-              tilingScheme: new Cesium.GeographicTilingScheme(),
+              tilingScheme: new Cesium.WebMercatorTilingScheme(),
+              maximumLevel: description.maxzoom,
+              rectangle: Cesium.Rectangle.fromDegrees(west, south, east, north),
             }),
           );
         } else if (imagery) {

@@ -73,6 +73,7 @@ std::optional<std::string> read_below(const std::filesystem::path& dir,
 
 std::vector<StaticMount> web_root_mounts(const std::filesystem::path& root) {
   return {{"/view/", root / "view", "index.html"},
+          {"/map/", root / "map", "index.html"},
           {"/lib/cesium/", root / "node_modules/cesium/Build/Cesium", ""},
           {"/lib/maplibre/", root / "node_modules/maplibre-gl/dist", ""}};
 }

@@ -2,32 +2,41 @@
 
 #include <atomic>
 #include <condition_variable>
-#include <map>
+#include <functional>
 #include <mutex>
+#include <set>
+
+#include <fmt/format.h>
 
 #include "relief/base/lru_cache.h"
 #include "relief/web/tile_path.h"
 
 namespace relief::web {
-
 namespace {
 
-constexpr std::string_view kTerrain = "/terrain/";
+// A tile of one route.
+struct TileRequest {
+  int route = 0;
+  int z = 0;
+  uint32_t x = 0, y = 0;
+  auto operator<=>(const TileRequest&) const = default;
+};
+struct TileRequestHash {
+  size_t operator()(const TileRequest& t) const {
+    return std::hash<uint64_t>{}((uint64_t{t.x} << 32 | t.y) * 131 +
+                                 static_cast<uint64_t>(t.z * 8 + t.route));
+  }
+};
 
 // One generation per tile at a time: the first request makes it, the
 // others wait for it instead of making it again.
 class InFlight {
  public:
   using Body = std::shared_ptr<const std::string>;
-  template <class Make>
-  Body get_or_make(const TerrainKey& key, Make make) {
+  Body get_or_make(const TileRequest& key, const std::function<Body()>& make) {
     std::unique_lock lock(mutex_);
-    for (;;) {
-      auto it = pending_.find(key);
-      if (it == pending_.end()) break;
-      done_.wait(lock);
-    }
-    pending_[key] = true;
+    done_.wait(lock, [&] { return !pending_.contains(key); });
+    pending_.insert(key);
     lock.unlock();
     Body body = make();
     lock.lock();
@@ -39,38 +48,82 @@ class InFlight {
  private:
   std::mutex mutex_;
   std::condition_variable done_;
-  std::map<TerrainKey, bool> pending_;
+  std::set<TileRequest> pending_;
 };
+
+// A tile route: "/prefix/{z}/{x}/{y}.ext", its description file, and how
+// its tiles are made.
+struct Route {
+  std::string prefix, extension, description_name, description;
+  std::string content_type, content_encoding;
+  std::function<bool(int, uint32_t, uint32_t)> available;
+  std::function<Result<std::vector<std::byte>>(int, uint32_t, uint32_t)> make;
+};
+
+std::vector<Route> routes_of(const WebLayers& layers, const std::string& name) {
+  std::vector<Route> routes;
+  if (const auto t = layers.terrain) {
+    routes.push_back({"/terrain/", ".terrain", "layer.json", t->layer_json(name),
+                      "application/vnd.quantized-mesh", "gzip",
+                      [t](int z, uint32_t x, uint32_t y) {
+                        return t->available({z, x, y});
+                      },
+                      [t](int z, uint32_t x, uint32_t y) {
+                        return t->tile({z, x, y});
+                      }});
+  }
+  if (const auto d = layers.dem) {
+    for (const DemEncoding e : {DemEncoding::TerrainRgb, DemEncoding::Terrarium}) {
+      routes.push_back({fmt::format("/{}/", format_name(e)), ".png", "tiles.json",
+                        d->tile_json(name, e), "image/png", "",
+                        [d](int z, uint32_t x, uint32_t y) {
+                          return d->available({z, x, y});
+                        },
+                        [d, e](int z, uint32_t x, uint32_t y) {
+                          return d->dem_png_tile({z, x, y}, e);
+                        }});
+    }
+  }
+  if (const auto im = layers.imagery) {
+    routes.push_back({"/imagery/", ".png", "tiles.json", im->tile_json(name, std::nullopt),
+                      "image/png", "",
+                      [im](int z, uint32_t x, uint32_t y) {
+                        return im->available({z, x, y});
+                      },
+                      [im](int z, uint32_t x, uint32_t y) {
+                        return im->imagery_png_tile({z, x, y});
+                      }});
+  }
+  return routes;
+}
 
 }  // namespace
 
 struct WebService::Impl {
-  std::shared_ptr<const TerrainTiler> terrain;
   WebServiceOptions options;
-  std::string layer_json;
-  mutable LruCache<TerrainKey, std::string, TerrainKeyHash> tiles;
+  std::vector<Route> routes;
+  mutable LruCache<TileRequest, std::string, TileRequestHash> tiles;
   mutable InFlight in_flight;
   mutable std::atomic<uint64_t> made{0};
   StaticFiles pages;
 
-  Impl(std::shared_ptr<const TerrainTiler> t, WebServiceOptions o)
-      : terrain(std::move(t)),
-        options(std::move(o)),
-        layer_json(terrain ? terrain->layer_json(options.name) : std::string()),
+  Impl(const WebLayers& layers, WebServiceOptions o)
+      : options(std::move(o)),
+        routes(routes_of(layers, options.name)),
         tiles(options.cache_bytes, [](const std::string& s) { return s.size() + 64; }),
         pages(options.pages) {}
 
-  std::optional<WebAnswer> terrain_tile(std::string_view rest) const {
-    const auto path = parse_tile_path(rest, ".terrain");
-    if (!path) return std::nullopt;
-    const TerrainKey key{path->z, path->x, path->y};
-    if (!terrain->available(key)) return std::nullopt;
+  std::optional<WebAnswer> tile(int index, std::string_view rest) const {
+    const Route& route = routes[static_cast<size_t>(index)];
+    const auto path = parse_tile_path(rest, route.extension);
+    if (!path || !route.available(path->z, path->x, path->y)) return std::nullopt;
+    const TileRequest key{index, path->z, path->x, path->y};
     auto body = tiles.get(key);
     if (!body) {
       body = in_flight.get_or_make(key, [&]() -> InFlight::Body {
         // Another request may have made it while this one waited.
         if (auto hit = tiles.get(key)) return hit;
-        auto bytes = terrain->tile(key);
+        auto bytes = route.make(key.z, key.x, key.y);
         if (!bytes) return nullptr;
         ++made;
         auto made_body = std::make_shared<const std::string>(
@@ -81,21 +134,26 @@ struct WebService::Impl {
     }
     // A store tile that cannot be read: no answer rather than a wrong one.
     if (!body) return std::nullopt;
-    return WebAnswer{"application/vnd.quantized-mesh", "gzip", *body};
+    return WebAnswer{route.content_type, route.content_encoding, *body};
   }
 };
 
+WebService::WebService(WebLayers layers, WebServiceOptions options)
+    : impl_(std::make_unique<Impl>(layers, std::move(options))) {}
 WebService::WebService(std::shared_ptr<const TerrainTiler> terrain, WebServiceOptions options)
-    : impl_(std::make_unique<Impl>(std::move(terrain), std::move(options))) {}
+    : WebService(WebLayers{std::move(terrain), nullptr, nullptr}, std::move(options)) {}
 WebService::~WebService() = default;
 
 std::optional<WebAnswer> WebService::answer(std::string_view target) const {
   const std::string_view path = target_path(target);
-  if (!path.starts_with(kTerrain)) return impl_->pages.answer(path);
-  if (!impl_->terrain) return std::nullopt;
-  const std::string_view rest = path.substr(kTerrain.size());
-  if (rest == "layer.json") return WebAnswer{"application/json", "", impl_->layer_json};
-  return impl_->terrain_tile(rest);
+  for (size_t i = 0; i < impl_->routes.size(); ++i) {
+    const Route& route = impl_->routes[i];
+    if (!path.starts_with(route.prefix)) continue;
+    const std::string_view rest = path.substr(route.prefix.size());
+    if (rest == route.description_name) return WebAnswer{"application/json", "", route.description};
+    return impl_->tile(static_cast<int>(i), rest);
+  }
+  return impl_->pages.answer(path);
 }
 
 uint64_t WebService::tiles_made() const {

@@ -16,88 +16,15 @@
 "use strict";
 
 const fs = require("fs");
-const os = require("os");
-const path = require("path");
 const { PNG } = require("pngjs");
-const puppeteer = require("puppeteer-core");
+const { openReady, fail: failNamed } = require("./chromium.cjs");
 
-const kChromium = process.env.RELIEF_CHROMIUM || "/usr/bin/chromium";
-
-function fail(message) {
-  process.stderr.write(`browser_view: ${message}\n`);
-  process.exit(1);
-}
+const fail = (message) => failNamed("browser_view", message);
 
 async function main() {
   const request = JSON.parse(fs.readFileSync(process.argv[2], "utf8"));
-  if (!fs.existsSync(kChromium)) {
-    fail(`${kChromium} is missing: run scripts/setup.sh (Debian package chromium)`);
-  }
-  const timings = {};
-  const t0 = Date.now();
-  const lap = (name) => (timings[name] = Date.now() - t0);
-  const profile = fs.mkdtempSync(path.join(os.tmpdir(), "relief-chromium-"));
-  const browser = await puppeteer.launch({
-    executablePath: kChromium,
-    headless: true,
-    userDataDir: profile,
-    defaultViewport: { width: request.width, height: request.height, deviceScaleFactor: 1 },
-    args: [
-      "--no-sandbox",
-      // WebGL without a GPU: ANGLE on SwiftShader (not --disable-gpu, which
-      // would leave the page without WebGL).
-      "--use-angle=swiftshader",
-      "--enable-unsafe-swiftshader",
-      // The machine's network is closed: no background connections.
-      "--disable-background-networking",
-      "--disable-component-update",
-      "--disable-sync",
-      "--disable-quic",
-      "--no-first-run",
-      `--window-size=${request.width},${request.height}`,
-    ],
-  });
+  const { page, consoleLines, timings, lap, close } = await openReady("browser_view", request);
   try {
-    lap("launched");
-    const page = await browser.newPage();
-    const consoleLines = [];
-    page.on("console", (m) => consoleLines.push(`${m.type()}: ${m.text()}`));
-    // A script that fails before the page's error listener exists (Cesium.js
-    // missing, say) ends the wait at once instead of at the timeout.
-    let pageError;
-    const pageFailed = new Promise((resolve, reject) => (pageError = reject));
-    pageFailed.catch(() => {});
-    page.on("pageerror", (e) => {
-      consoleLines.push(`pageerror: ${e.message}`);
-      pageError(e);
-    });
-    await page.goto(request.url, { waitUntil: "load", timeout: request.timeoutMs });
-    lap("loaded");
-    try {
-      await Promise.race([
-        page.waitForFunction(() => window.relief && (window.relief.ready || window.relief.error), {
-          timeout: request.timeoutMs,
-          polling: 100,
-        }),
-        pageFailed,
-      ]);
-    } catch (e) {
-      if (e && !(e instanceof puppeteer.TimeoutError)) {
-        fail(`the page failed: ${e.message}\n${consoleLines.join("\n")}`);
-      }
-      const s = await page.evaluate(() =>
-        window.relief
-          ? { tilesLoaded: relief.tilesLoaded, pending: relief.pending, requests: relief.requests }
-          : null,
-      );
-      fail(
-        `window.relief.ready not true within ${request.timeoutMs} ms (${JSON.stringify(s)})\n` +
-          consoleLines.join("\n"),
-      );
-    }
-    const error = await page.evaluate(() => window.relief.error);
-    if (error) fail(`the page failed: ${error}\n${consoleLines.join("\n")}`);
-    lap("ready");
     const status = await page.evaluate(() => ({
       ready: relief.ready,
       tilesLoaded: relief.tilesLoaded,
@@ -182,8 +109,7 @@ async function main() {
       }) + "\n",
     );
   } finally {
-    await browser.close();
-    fs.rmSync(profile, { recursive: true, force: true });
+    await close();
   }
 }
 

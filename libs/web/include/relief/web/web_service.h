@@ -4,7 +4,10 @@
 // cache; concurrent requests for one tile make it once; and the pages that
 // show them, as plain files of a web root.
 //   /terrain/layer.json, /terrain/{z}/{x}/{y}.terrain   Cesium quantized-mesh
-//   /view/, /lib/cesium/..., /lib/maplibre/...         pages and libraries
+//   /terrain-rgb/{z}/{x}/{y}.png, /terrarium/...        MapLibre raster-dem
+//   /imagery/{z}/{x}/{y}.png                            imagery, Web Mercator
+//   (each with tiles.json or layer.json beside)
+//   /view/, /map/, /lib/cesium/..., /lib/maplibre/...  pages and libraries
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -12,6 +15,7 @@
 #include <string_view>
 #include <vector>
 
+#include "relief/web/raster_tiles.h"
 #include "relief/web/static_files.h"
 #include "relief/web/terrain_tiler.h"
 #include "relief/web/web_answer.h"
@@ -24,9 +28,17 @@ struct WebServiceOptions {
   std::vector<StaticMount> pages;             // web_root_mounts(root); empty: no pages
 };
 
+// What is served; any may be null (its routes then answer 404).
+struct WebLayers {
+  std::shared_ptr<const TerrainTiler> terrain;  // /terrain/
+  std::shared_ptr<const RasterTiler> dem;       // /terrain-rgb/, /terrarium/
+  std::shared_ptr<const RasterTiler> imagery;   // /imagery/
+};
+
 class WebService {
  public:
-  // `terrain` may be null (a store that is no elevation): no /terrain/ routes.
+  WebService(WebLayers layers, WebServiceOptions options = {});
+  // Terrain alone; null: no tile routes.
   WebService(std::shared_ptr<const TerrainTiler> terrain, WebServiceOptions options = {});
   ~WebService();
   // The answer for a request target, nullopt when it names nothing here (or

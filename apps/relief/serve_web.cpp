@@ -1,0 +1,59 @@
+#include "serve_web.h"
+
+#include <fmt/format.h>
+
+#include "relief/tiles/store.h"
+#include "render_setup.h"
+
+namespace relief::cli {
+
+std::vector<OptionSpec> serve_web_options() {
+  return {{"--elevation"}, {"--fuse"}, {"--weights"}, {"--imagery"}};
+}
+
+namespace {
+
+Result<std::shared_ptr<const web::RasterTiler>> raster_tiler(
+    std::shared_ptr<const tiles::Store> s) {
+  auto tiler = RELIEF_TRY(web::RasterTiler::create(std::move(s)));
+  return std::make_shared<const web::RasterTiler>(std::move(tiler));
+}
+
+}  // namespace
+
+Result<std::shared_ptr<web::WebService>> make_web_service(const Args& args, const std::string& root,
+                                                          pipeline::ElevationProcessing elevation,
+                                                          web::WebServiceOptions options) {
+  web::WebLayers layers;
+  const tiles::Store plain = RELIEF_TRY(open_store(root));
+  const auto kind = plain.manifest().kind;
+  if (kind == tiles::DatasetKind::Elevation) {
+    auto store = std::make_shared<const tiles::Store>(
+        RELIEF_TRY(open_elevation(args, root, std::move(elevation))));
+    layers.terrain =
+        std::make_shared<const web::TerrainTiler>(RELIEF_TRY(web::TerrainTiler::create(store)));
+    layers.dem = RELIEF_TRY(raster_tiler(store));
+  } else if (!args.get_all("--elevation").empty() || !elevation.empty()) {
+    return fail(
+        fmt::format("serve: {} holds {}: --elevation and --elevation-op need an "
+                    "elevation STORE",
+                    root, tiles::to_string(kind)));
+  } else if (kind == tiles::DatasetKind::Imagery) {
+    layers.imagery =
+        RELIEF_TRY(raster_tiler(std::make_shared<const tiles::Store>(std::move(plain))));
+  }
+  if (auto imagery = args.get("--imagery")) {
+    if (layers.imagery) return fail("--imagery: STORE already holds the imagery served");
+    tiles::Store store = RELIEF_TRY(open_store(*imagery));
+    if (store.manifest().kind != tiles::DatasetKind::Imagery) {
+      return fail(fmt::format("--imagery: {} holds {} data, not imagery", *imagery,
+                              tiles::to_string(store.manifest().kind)));
+    }
+    layers.imagery =
+        RELIEF_TRY(raster_tiler(std::make_shared<const tiles::Store>(std::move(store))));
+  }
+  if (!layers.terrain && !layers.dem && !layers.imagery && options.pages.empty()) return nullptr;
+  return std::make_shared<web::WebService>(std::move(layers), std::move(options));
+}
+
+}  // namespace relief::cli
