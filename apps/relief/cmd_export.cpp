@@ -7,6 +7,7 @@
 #include "allocator.h"
 #include "args.h"
 #include "commands.h"
+#include "elevation_options.h"
 #include "export_web.h"
 #include "output_safety.h"
 #include "relief/ingest/export.h"
@@ -42,6 +43,11 @@ DIR/tiles.json and DIR/{z}/{x}/{y}.png, 256 pixels a side (or --tile-size
 finest level; larger zooms are upsampled from it). Nodata is 0 m in a DEM,
 transparent in imagery.
 
+The web formats of an elevation store take its elevation as relief render
+draws it: --elevation STORE2 (repeatable) [--fuse first|mean] [--weights
+W1,W2,..] fuse layers, --elevation-op OP [--elevation-param K=V] apply a
+chain (relief render --help).
+
 Web exports are written beside DIR and moved into place when complete; an
 earlier web export at DIR is replaced, anything else there is refused.
 )";
@@ -62,7 +68,11 @@ Result<geo::GeoBox> parse_bbox(const std::string& text) {
 
 int run_export(const std::vector<std::string>& argv) {
   if (wants_help(argv)) return print_help(kExportHelp);
-  auto args = Args::parse(argv,
+  // Repeatable and ordered: taken out before the other options are parsed.
+  std::vector<std::string> rest = argv;
+  auto elevation = take_elevation_processing(rest);
+  if (!elevation) return report_error(elevation.error().message);
+  auto args = Args::parse(rest,
                           {{"--level"},
                            {"--bbox"},
                            {"--memory"},
@@ -73,15 +83,21 @@ int run_export(const std::vector<std::string>& argv) {
                            {"--max-error"},
                            {"--threads"},
                            {"--tile-size"},
-                           {"--max-zoom"}},
+                           {"--max-zoom"},
+                           {"--elevation"},
+                           {"--fuse"},
+                           {"--weights"}},
                           "export");
   if (!args) return report_error(args.error().message);
   if (args->positional().size() != 1) return report_error("export: expected exactly one STORE");
   if (auto format = args->get("--format"); format && *format != "geotiff") {
-    return run_export_web(*args, *format);
+    return run_export_web(*args, *format, std::move(*elevation));
   }
-  for (const char* web_only :
-       {"--max-level", "--max-error", "--threads", "--tile-size", "--max-zoom"}) {
+  if (!elevation->empty()) {
+    return report_error("export: --elevation-op applies to the web formats only");
+  }
+  for (const char* web_only : {"--max-level", "--max-error", "--threads", "--tile-size",
+                               "--max-zoom", "--elevation", "--fuse", "--weights"}) {
     if (args->has(web_only)) {
       return report_error(fmt::format(
           "export: {} applies to the web formats only (quantized-mesh, terrain-rgb, terrarium, "

@@ -17,6 +17,7 @@
 #include "relief/tiles/store.h"
 #include "relief/web/raster_tiles.h"
 #include "relief/web/terrain_tiler.h"
+#include "render_setup.h"
 
 namespace relief::cli {
 namespace {
@@ -228,9 +229,27 @@ Result<Tilers> make_tilers(const Args& args, const std::string& format, tiles::S
   return t;
 }
 
+// The store as relief render draws it: an elevation store with its
+// --elevation layers fused and its --elevation-op chain applied.
+Result<tiles::Store> open_web_input(const Args& args, const std::string& input,
+                                    pipeline::ElevationProcessing elevation) {
+  tiles::Store store = RELIEF_TRY(open_store(input));
+  if (store.manifest().kind == tiles::DatasetKind::Elevation) {
+    return open_elevation(args, input, std::move(elevation));
+  }
+  if (!elevation.empty() || !args.get_all("--elevation").empty()) {
+    return fail(
+        fmt::format("export: {} holds {}: --elevation and --elevation-op need an "
+                    "elevation STORE",
+                    input, tiles::to_string(store.manifest().kind)));
+  }
+  return store;
+}
+
 }  // namespace
 
-int run_export_web(const Args& args, const std::string& format) {
+int run_export_web(const Args& args, const std::string& format,
+                   pipeline::ElevationProcessing elevation) {
   const auto encoding = web::dem_encoding_from_format(format);
   if (format != "quantized-mesh" && format != "xyz" && !encoding) {
     return report_error(fmt::format("--format: '{}' is not one of {}", format, kFormats));
@@ -240,12 +259,14 @@ int run_export_web(const Args& args, const std::string& format) {
   if (!threads) return report_error(threads.error().message);
   if (!args.get("--output")) return report_error("export: -o DIR is required");
   const fs::path out = *args.get("--output");
-  if (auto safe = check_outputs_spare_inputs({{"-o", out.string(), OutputKind::Store}}, {input});
+  std::vector<std::string> inputs = args.get_all("--elevation");
+  inputs.push_back(input);
+  if (auto safe = check_outputs_spare_inputs({{"-o", out.string(), OutputKind::Store}}, inputs);
       !safe) {
     return report_error(safe.error().message);
   }
   if (auto ok = check_destination(out); !ok) return report_error(ok.error().message);
-  auto store = tiles::Store::open(input);
+  auto store = open_web_input(args, input, std::move(elevation));
   if (!store) return report_error(store.error().message);
   auto tilers = make_tilers(args, format, std::move(*store));
   if (!tilers) return report_error(tilers.error().message);

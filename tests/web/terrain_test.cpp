@@ -272,3 +272,40 @@ TEST_F(Terrain, ExportRefusesBadArgumentsWithOneLineAndWritesNothing) {
 
 }  // namespace
 }  // namespace relief::web
+
+namespace relief::web {
+namespace {
+
+// The export gives web clients the elevation as relief render draws it: a
+// mean of a store with itself is the store; a smoothing chain changes the
+// heights; options for elevation layers on an imagery-only format fail.
+TEST_F(Terrain, ExportOfFusedAndProcessedElevation) {
+  testing::ScratchDir dir("terrain_layers");
+  const std::string s = store_path().string();
+  const auto run = [&](const std::string& out, std::vector<std::string> extra) {
+    std::vector<std::string> args = {"export", s,   "--format", "quantized-mesh", "--max-level",
+                                     "9",      "-o", (dir / out).string(), "-q"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    return testing::run_relief(args);
+  };
+  ASSERT_EQ(run("plain", {}).exit_code, 0);
+  auto r = run("fused", {"--elevation", s, "--fuse", "mean"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = run("smooth", {"--elevation-op", "mean", "--elevation-param", "radius=2"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string tile = "9/516/376.terrain";
+  auto plain = read_file(dir / "plain" / tile, 1 << 24);
+  auto fused = read_file(dir / "fused" / tile, 1 << 24);
+  auto smooth = read_file(dir / "smooth" / tile, 1 << 24);
+  ASSERT_TRUE(plain && fused && smooth);
+  EXPECT_EQ(*plain, *fused) << "the mean of a store with itself is the store";
+  const auto a = decode_quantized_mesh(gunzip(*plain)), b = decode_quantized_mesh(gunzip(*smooth));
+  EXPECT_LT(b.max_height - b.min_height, a.max_height - a.min_height) << "smoothed";
+  EXPECT_TRUE(testing::is_one_line_error(
+      testing::run_relief({"export", s, "--level", "3", "--elevation-op", "mean", "-o",
+                           (dir / "x.tif").string()}),
+      "--elevation-op"));
+}
+
+}  // namespace
+}  // namespace relief::web
