@@ -48,6 +48,9 @@ table() { printf '%s\n' "$@" >>"$BENCH_TABLE"; }
 # log), then writes the table next to the log and publishes if asked.
 bench_main() {
   BENCH_NAME=$1
+  # The page the table goes to: docs/benchmarks.md, or BENCH_DOC (the web
+  # benches have their own page).
+  local doc=${BENCH_DOC:-docs/benchmarks.md}
   local func=$2 out="" publish=0 rest=()
   shift 2
   while (($#)); do
@@ -60,9 +63,9 @@ bench_main() {
   if ((publish)); then
     out=docs
     # Checked first: a long run must not end on a page it cannot publish into.
-    grep -qxF "<!-- bench/$BENCH_NAME table -->" docs/benchmarks.md &&
-      grep -qxF "<!-- end bench/$BENCH_NAME table -->" docs/benchmarks.md ||
-      { echo "bench/$BENCH_NAME: docs/benchmarks.md has no '<!-- bench/$BENCH_NAME table -->' block" >&2; exit 1; }
+    grep -qxF "<!-- bench/$BENCH_NAME table -->" "$doc" &&
+      grep -qxF "<!-- end bench/$BENCH_NAME table -->" "$doc" ||
+      { echo "bench/$BENCH_NAME: $doc has no '<!-- bench/$BENCH_NAME table -->' block" >&2; exit 1; }
   fi
   out=${out:-$BENCH_WORK/out}
   mkdir -p "$out" "$BENCH_WORK"
@@ -102,18 +105,18 @@ bench_main() {
   for old in docs/bench-"$BENCH_NAME"-[0-9][0-9][0-9][0-9]-[0-9][0-9]-[0-9][0-9].txt; do
     [[ $old == "$log" || ! -e $old ]] || rm -f "$old"
   done
-  rm -f "$md"  # published into docs/benchmarks.md instead
-  python3 - docs/benchmarks.md "$BENCH_NAME" "$BENCH_TABLE" <<'PY'
+  rm -f "$md"  # published into $doc instead
+  python3 - "$doc" "$BENCH_NAME" "$BENCH_TABLE" <<'PY'
 import sys
 doc, name = sys.argv[1], sys.argv[2]
 table = open(sys.argv[3]).read()
 text = open(doc).read()
 begin, end = f"<!-- bench/{name} table -->", f"<!-- end bench/{name} table -->"
 if text.count(begin) != 1 or text.count(end) != 1:
-    sys.exit(f"bench/{name}: docs/benchmarks.md needs exactly one '{begin}' ... '{end}' block")
+    sys.exit(f"bench/{name}: {doc} needs exactly one '{begin}' ... '{end}' block")
 pre, rest = text.split(begin)
 _, post = rest.split(end)
 open(doc, "w").write(pre + begin + "\n" + table + end + post)
 PY
-  echo "bench/$BENCH_NAME: published into docs/benchmarks.md and $log"
+  echo "bench/$BENCH_NAME: published into $doc and $log"
 }
