@@ -23,7 +23,7 @@ class DemPngDecoder : public testing::SmallStoreSuite {
  protected:
   void SetUp() override {
     ASSERT_TRUE(fs::exists(fs::path(RELIEF_WEB_JS_DIR) / "node_modules/pngjs"))
-        << "pngjs is missing: run scripts/setup.sh (npm ci in tests/web/js)";
+        << "pngjs is missing: run scripts/setup.sh --web (npm ci in tests/web/js)";
   }
 
   // Exports the store in `format` at `tile_size`, then asks node for the

@@ -1,7 +1,7 @@
 // relief's terrain read by decoders relief did not write: CesiumJS's own
 // CesiumTerrainProvider and sampleTerrain, and loaders.gl's
 // QuantizedMeshLoader, under node (tests/web/js/decode_terrain.cjs, its
-// packages pinned by package-lock.json and installed by scripts/setup.sh).
+// packages pinned by package-lock.json and installed by scripts/setup.sh --web).
 #include <gtest/gtest.h>
 
 #include <signal.h>
@@ -27,7 +27,7 @@ class IndependentDecoders : public testing::SmallStoreSuite {
  protected:
   void SetUp() override {
     ASSERT_TRUE(fs::exists(fs::path(RELIEF_WEB_JS_DIR) / "node_modules/cesium"))
-        << "CesiumJS is missing: run scripts/setup.sh (npm ci in tests/web/js)";
+        << "CesiumJS is missing: run scripts/setup.sh --web (npm ci in tests/web/js)";
   }
 
   // Exports the store with `extra` options (with `served`, also starts

@@ -22,7 +22,7 @@ function fail(name, message) {
 // consoleLines, timings, lap, close}.
 async function openReady(name, request) {
   if (!fs.existsSync(kChromium)) {
-    fail(name, `${kChromium} is missing: run scripts/setup.sh (Debian package chromium)`);
+    fail(name, `${kChromium} is missing: run scripts/setup.sh --web (Debian package chromium)`);
   }
   const timings = {};
   const t0 = Date.now();
