@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <cstdio>
+
 #include "relief/tiles/store.h"
 #include "render_setup.h"
 
@@ -25,7 +27,18 @@ Result<std::shared_ptr<web::WebService>> make_web_service(const Args& args, cons
                                                           pipeline::ElevationProcessing elevation,
                                                           web::WebServiceOptions options) {
   web::WebLayers layers;
-  const tiles::Store plain = RELIEF_TRY(open_store(root));
+  auto opened = open_store(root);
+  const bool layer_options = !args.get_all("--elevation").empty() || !elevation.empty() ||
+                             args.get("--imagery").has_value();
+  if (!opened && !layer_options) {
+    // The store's files are still served as they are (a client may need
+    // them to learn what is wrong, e.g. a store to upgrade): no web tiles.
+    std::fprintf(stderr, "relief serve: no web tiles: %s\n", opened.error().message.c_str());
+    return options.pages.empty()
+               ? nullptr
+               : std::make_shared<web::WebService>(std::move(layers), std::move(options));
+  }
+  const tiles::Store plain = RELIEF_TRY(std::move(opened));
   const auto kind = plain.manifest().kind;
   if (kind == tiles::DatasetKind::Elevation) {
     auto store = std::make_shared<const tiles::Store>(
