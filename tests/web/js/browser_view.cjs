@@ -16,12 +16,8 @@
 "use strict";
 
 const fs = require("fs");
-const os = require("os");
-const path = require("path");
 const { PNG } = require("pngjs");
-const puppeteer = require("puppeteer-core");
-
-const kChromium = process.env.RELIEF_CHROMIUM || "/usr/bin/chromium";
+const { launchChromium, puppeteer } = require("./chromium.cjs");
 
 function fail(message) {
   process.stderr.write(`browser_view: ${message}\n`);
@@ -30,33 +26,16 @@ function fail(message) {
 
 async function main() {
   const request = JSON.parse(fs.readFileSync(process.argv[2], "utf8"));
-  if (!fs.existsSync(kChromium)) {
-    fail(`${kChromium} is missing: run scripts/setup.sh (Debian package chromium)`);
-  }
   const timings = {};
   const t0 = Date.now();
   const lap = (name) => (timings[name] = Date.now() - t0);
-  const profile = fs.mkdtempSync(path.join(os.tmpdir(), "relief-chromium-"));
-  const browser = await puppeteer.launch({
-    executablePath: kChromium,
-    headless: true,
-    userDataDir: profile,
-    defaultViewport: { width: request.width, height: request.height, deviceScaleFactor: 1 },
-    args: [
-      "--no-sandbox",
-      // WebGL without a GPU: ANGLE on SwiftShader (not --disable-gpu, which
-      // would leave the page without WebGL).
-      "--use-angle=swiftshader",
-      "--enable-unsafe-swiftshader",
-      // The machine's network is closed: no background connections.
-      "--disable-background-networking",
-      "--disable-component-update",
-      "--disable-sync",
-      "--disable-quic",
-      "--no-first-run",
-      `--window-size=${request.width},${request.height}`,
-    ],
-  });
+  let chromium;
+  try {
+    chromium = await launchChromium(request.width, request.height);
+  } catch (e) {
+    fail(e.message);
+  }
+  const { browser } = chromium;
   try {
     lap("launched");
     const page = await browser.newPage();
@@ -182,8 +161,7 @@ async function main() {
       }) + "\n",
     );
   } finally {
-    await browser.close();
-    fs.rmSync(profile, { recursive: true, force: true });
+    await chromium.close();
   }
 }
 
