@@ -40,6 +40,29 @@ median() {  # numbers on stdin -> their median
   sort -g | awk '{a[NR] = $1} END {if (NR == 0) exit 1; print (NR % 2 ? a[(NR + 1) / 2] : (a[NR / 2] + a[NR / 2 + 1]) / 2)}'
 }
 
+# flight_path FILE LON0 LAT0 LON1 LAT1 HEIGHT: a camera path file (relief
+# view --play) of a DURATION-second flight at HEIGHT m, out and back along a
+# line with a turn at each end, looking ahead and down at 25 degrees
+# (bench/view's flights; bench/web flies the Himalaya one in both clients).
+flight_path() {
+  python3 - "$@" "$DURATION" <<'PY'
+import json, math, sys
+out, lon0, lat0, lon1, lat1, h, duration = sys.argv[1], *map(float, sys.argv[2:])
+heading = math.degrees(math.atan2((lon1 - lon0) * math.cos(math.radians(lat0)), lat1 - lat0)) % 360
+half, turn = duration / 2, duration / 30
+keys = [
+    {"time": 0, "camera": [lon0, lat0, h, heading, -25, 0]},
+    {"time": half - turn, "camera": [lon1, lat1, h, heading, -25, 0]},
+    {"time": half + turn, "camera": [lon1, lat1, h, (heading + 180) % 360, -25, 0]},
+    {"time": duration, "camera": [lon0, lat0, h, (heading + 180) % 360, -25, 0]},
+]
+json.dump({"fps": 30, "keyframes": keys}, open(out, "w"))
+PY
+}
+
+# himalaya_flight FILE: the flight over the Himalaya block (bench/view, bench/web).
+himalaya_flight() { flight_path "$1" 79.3 29.3 82.3 31.3 9000; }
+
 # table LINE...: appends lines to the markdown table file of this run.
 table() { printf '%s\n' "$@" >>"$BENCH_TABLE"; }
 

@@ -16,7 +16,9 @@
 #include "args.h"
 #include "commands.h"
 #include "output_safety.h"
+#include "relief/base/file_io.h"
 #include "relief/base/threads.h"
+#include "relief/lod/measured_error.h"
 #include "relief/stream/tile_loader.h"
 #include "relief/view/path_file.h"
 #include "relief/window/viewer.h"
@@ -71,6 +73,9 @@ options:
                      frame is complete, or --until-complete seconds later
   --until-complete S (default 30)
   --stats FILE       per-frame statistics and a summary as JSON, written at exit
+  --error-points FILE  with --stats: the last frame's screen-space error at
+                     these data points, [[LON, LAT, HEIGHT], ...] (bench/web
+                     measures another client's frame against the same points)
   --record FILE      record the camera of every frame to a path JSON, written at
                      exit (F9 pauses and resumes)
   --export-movie FILE.mp4  F10 (and the end of an --exit-when-done session)
@@ -136,7 +141,7 @@ Status check_writable(const char* option, const std::string& path) {
 Status check_view_outputs(const Args& args, const std::vector<std::string>& texture_paths) {
   std::vector<std::string> inputs = args.positional();
   inputs.insert(inputs.end(), texture_paths.begin(), texture_paths.end());
-  for (const char* name : {"--imagery", "--play"}) {
+  for (const char* name : {"--imagery", "--play", "--error-points"}) {
     if (auto p = args.get(name)) inputs.push_back(*p);
   }
   for (const std::string& p : args.get_all("--elevation")) inputs.push_back(p);
@@ -158,6 +163,32 @@ Status check_view_outputs(const Args& args, const std::vector<std::string>& text
     outputs.push_back({"--screenshot-dir", *p, OutputKind::Directory});
   }
   return check_outputs_spare_inputs(outputs, inputs);
+}
+
+// --error-points FILE: [[lon, lat, height], ...], degrees and metres.
+Result<std::vector<lod::DataPoint>> read_error_points(const std::string& path) {
+  constexpr uint64_t kMaxBytes = uint64_t{64} << 20;
+  const auto bytes = RELIEF_TRY(read_file(path, kMaxBytes));
+  const char* text = reinterpret_cast<const char*>(bytes.data());
+  const nlohmann::json j = nlohmann::json::parse(text, text + bytes.size(), nullptr, false);
+  if (!j.is_array()) return fail("--error-points " + path + ": not a JSON array");
+  std::vector<lod::DataPoint> points;
+  for (const nlohmann::json& p : j) {
+    const bool triple =
+        p.is_array() && p.size() == 3 &&
+        std::all_of(p.begin(), p.end(), [](const auto& v) { return v.is_number(); });
+    const lod::DataPoint d =
+        triple ? lod::DataPoint{p[0].get<double>(), p[1].get<double>(), p[2].get<double>()}
+               : lod::DataPoint{NAN, NAN, NAN};
+    if (!(std::abs(d.lon) <= 180 && std::abs(d.lat) <= 90 && std::isfinite(d.height))) {
+      return fail(
+          fmt::format("--error-points {}: point {}: expected [lon, lat, height] in degrees "
+                      "and metres, got {}",
+                      path, points.size(), p.dump()));
+    }
+    points.push_back(d);
+  }
+  return points;
 }
 
 // The whole store, seen from the south at 45 degrees.
@@ -297,6 +328,7 @@ nlohmann::json stats_json(const window::ViewerSummary& s, const std::string& ren
       {"p99_frame_ms", s.p99_frame_ms},
       {"complete", s.complete},
       {"path_finished", s.path_finished},
+      {"path_end", s.path_end ? nlohmann::json(*s.path_end) : nlohmann::json()},
       {"renderer", renderer},
       {"allocator", allocator_description()},
       {"refine_threads", refine_threads ? refine_threads : std::thread::hardware_concurrency()},
@@ -338,6 +370,13 @@ Status export_recorded_path(const Args& args, RenderSetup& setup, const view::Pa
 int view_session(const Args& args, RenderSetup& setup) {
   auto options = viewer_options(args, setup);
   if (!options) return report_error(options.error().message);
+  std::vector<lod::DataPoint> error_points;
+  if (auto path = args.get("--error-points")) {
+    if (!args.get("--stats")) return report_error("--error-points: needs --stats (its output)");
+    auto points = read_error_points(*path);
+    if (!points) return report_error(points.error().message);
+    error_points = std::move(*points);
+  }
   // Refused now, not after the session it would have ended.
   if (auto movie = args.get("--export-movie"); movie && (setup.width % 2 || setup.height % 2)) {
     return report_error(fmt::format(
@@ -394,10 +433,21 @@ int view_session(const Args& args, RenderSetup& setup) {
     }
   }
   if (auto path = args.get("--stats")) {
-    const std::string text =
+    nlohmann::json stats =
         stats_json(*summary, (*window)->renderer(), loaders_json((*viewer)->scene(), so),
-                   (*viewer)->scene().options(), *options)
-            .dump(1);
+                   (*viewer)->scene().options(), *options);
+    if (args.get("--error-points") && !summary->frames_list.empty()) {
+      // The last frame's mesh against the given data, in pixels (null: not
+      // drawn there, or off screen).
+      auto pixels = (*viewer)->scene().measure_last_frame_at(summary->frames_list.back().camera,
+                                                             error_points);
+      if (!pixels) return report_error(pixels.error().message);
+      nlohmann::json list = nlohmann::json::array();
+      for (const std::optional<double>& p : *pixels)
+        list.push_back(p ? nlohmann::json(*p) : nullptr);
+      stats["summary"]["final_error"] = {{"points", error_points.size()}, {"pixels", list}};
+    }
+    const std::string text = stats.dump(1);
     if (auto st = write_json(*path, text); !st) return report_error(st.error().message);
   }
   std::printf("%zu frames in %.1f s: frame time p50 %.1f ms, p99 %.1f ms; last frame %s\n",
@@ -431,6 +481,7 @@ int run_view(const std::vector<std::string>& command_line) {
                                               {"--exit-when-done", "", false},
                                               {"--until-complete"},
                                               {"--stats"},
+                                              {"--error-points"},
                                               {"--record"},
                                               {"--screenshot"},
                                               {"--screenshot-dir"},

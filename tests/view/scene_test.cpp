@@ -144,6 +144,62 @@ TEST_F(SceneTest, InteractiveFramesNeverWaitAndConvergeToTheCompleteFrame) {
   }
 }
 
+// The last frame measured at given data points (bench/web measures another
+// client's frame at the same points): the store's finest samples around the
+// view's target are drawn within the threshold; a point 3000 m above its
+// sample is pixels off; a point outside the view or without a height has
+// no figure.
+TEST_F(SceneTest, TheLastFrameIsMeasuredAtGivenDataPoints) {
+  const tiles::Store& store = testing::pyrenees_store();
+  const int finest = store.manifest().max_level;
+  const int w = store.grid().width(), h = store.grid().height(), b = store.grid().border();
+  const double n = std::ldexp(1.0, finest);
+  std::vector<lod::DataPoint> points;
+  for (int i = -5; i <= 5; ++i) {
+    for (int j = -5; j <= 5; ++j) {
+      const double lon = 1.5 + i * 0.004, lat = 42.5 + j * 0.004;
+      const geo::TileKey k{finest, static_cast<uint32_t>((lon + 180) / 360 * n),
+                           static_cast<uint32_t>((90 - lat) / 180 * n)};
+      const geo::GeoBox kb = k.bounds();
+      const int x = static_cast<int>((lon - kb.west) / kb.width() * w);
+      const int y = static_cast<int>((kb.north - lat) / kb.height() * h);
+      auto tile = store.read_tile(k);
+      ASSERT_TRUE(tile) << tile.error().message;
+      const tiles::Raster& r = tile->raster;
+      const float height =
+          r.f32()[static_cast<size_t>(y + b) * r.width() + static_cast<size_t>(x + b)];
+      if (std::isnan(height)) continue;  // a void of the data
+      points.push_back(
+          {kb.west + (x + 0.5) * kb.width() / w, kb.north - (y + 0.5) * kb.height() / h, height});
+    }
+  }
+  for (const lod::LodMode mode : {lod::LodMode::edge_marks, lod::LodMode::quads}) {
+    SCOPED_TRACE(mode == lod::LodMode::quads ? "quads" : "edge marks");
+    auto complete = scene(false, mode);
+    ASSERT_TRUE(complete);
+    auto still = complete->draw(kOblique, *target_);
+    ASSERT_TRUE(still && still->complete);
+    std::vector<lod::DataPoint> all = points;
+    all.push_back({points[0].lon, points[0].lat, points[0].height + 3000});
+    all.push_back({1.5, 41.2, 500});                     // behind the camera, south of it
+    all.push_back({points[0].lon, points[0].lat, NAN});  // nodata
+    auto pixels = complete->measure_last_frame_at(kOblique, all);
+    ASSERT_TRUE(pixels) << pixels.error().message;
+    ASSERT_EQ(pixels->size(), all.size());
+    size_t measured = 0;
+    for (size_t i = 0; i < points.size(); ++i) {
+      if (!(*pixels)[i]) continue;
+      ++measured;
+      EXPECT_LE(*(*pixels)[i], 1.0) << points[i].lon << "," << points[i].lat;
+    }
+    EXPECT_GT(measured, points.size() * 9 / 10);
+    ASSERT_TRUE((*pixels)[points.size()]);
+    EXPECT_GT(*(*pixels)[points.size()], 2.0);
+    EXPECT_FALSE((*pixels)[points.size() + 1]);
+    EXPECT_FALSE((*pixels)[points.size() + 2]);
+  }
+}
+
 // The per-diamond errors of the tiles interactive frames refine were all
 // measured by the loader's threads (or at creation, level 0), none in a
 // frame, and the refined mesh is the one a complete frame measures inline.

@@ -96,11 +96,15 @@ json read_json(const std::filesystem::path& file) {
 
 TEST(ViewCommand, PlaysAPathWithoutInputAndWritesTheStatisticsOfEveryFrame) {
   ScratchDir dir("view_play");
-  const auto path = dir / "path.json", stats = dir / "stats.json";
+  const auto path = dir / "path.json", stats = dir / "stats.json", points = dir / "points.json";
   write_path(path);
-  auto r = run_relief({"view", store_path(), "--play", path.string(), "--exit-when-done", "--stats",
-                       stats.string(), "--size", "160x120", "--no-vsync"},
-                      kNoMesaLeakReport);
+  // The last frame measured at data points: one near the view's centre at
+  // sea level (the ground there is ~1 km higher: pixels off), one off screen.
+  std::ofstream(points) << "[[1.487, 42.497, 0], [1.45, 30.0, 0]]";
+  auto r = run_relief(
+      {"view", store_path(), "--play", path.string(), "--exit-when-done", "--stats", stats.string(),
+       "--size", "160x120", "--no-vsync", "--error-points", points.string()},
+      kNoMesaLeakReport);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const json s = read_json(stats);
   const json& frames = s["frames"];
@@ -108,6 +112,15 @@ TEST(ViewCommand, PlaysAPathWithoutInputAndWritesTheStatisticsOfEveryFrame) {
   EXPECT_EQ(s["summary"]["frames"], frames.size());
   EXPECT_TRUE(s["summary"]["path_finished"]);
   EXPECT_TRUE(s["summary"]["complete"]);
+  // The first frame at the path's end: on the clock of the frames' times.
+  const double end = s["summary"]["path_end"].get<double>();
+  EXPECT_GT(end, 0.5);
+  EXPECT_LE(end, frames.back()["time"].get<double>());
+  const json& error = s["summary"]["final_error"];
+  EXPECT_EQ(error["points"], 2);
+  ASSERT_EQ(error["pixels"].size(), 2u);
+  EXPECT_GT(error["pixels"][0].get<double>(), 5.0);
+  EXPECT_TRUE(error["pixels"][1].is_null());
   EXPECT_GT(s["summary"]["fps_p50"].get<double>(), 0);
   EXPECT_EQ(s["summary"]["target_fps"], 30) << "the viewer's frame budget by default";
   EXPECT_EQ(frames[0]["camera"][0], 1.40);
@@ -324,6 +337,14 @@ TEST(ViewCommand, BadInputIsAOneLineError) {
   const auto not_json = dir / "path.json";
   std::ofstream(not_json) << "fps: 30";
   expect_error(run_relief({"view", store, "--play", not_json.string()}), not_json.string());
+  expect_error(run_relief({"view", store, "--error-points", not_json.string()}), "--error-points");
+  const auto stats = (dir / "s.json").string();
+  expect_error(run_relief({"view", store, "--error-points", not_json.string(), "--stats", stats}),
+               not_json.string());
+  const auto bad_point = dir / "points.json";
+  std::ofstream(bad_point) << "[[1.5, 42.5, 100], [1.5, 95, 0]]";
+  expect_error(run_relief({"view", store, "--error-points", bad_point.string(), "--stats", stats}),
+               "point 1");
   expect_error(run_relief({"view", store, "--mode", "glider"}), "--mode");
   expect_error(run_relief({"view", store, "--target-fps", "-5"}), "--target-fps");
   expect_error(run_relief({"view", store, "--target-fps", "fast"}), "--target-fps");

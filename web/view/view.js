@@ -15,6 +15,8 @@
 //   requests, bytes  terrain requests answered and their body bytes (gzip)
 //   error        why the terrain could not be loaded, or null
 //   viewer       the Cesium.Viewer
+//   setCamera([LON, LAT, HEIGHT, HEADING, PITCH, ROLL])  the fragment's camera
+//                without a hashchange (bench/web flies a path frame by frame)
 "use strict";
 
 (function () {
@@ -204,6 +206,7 @@
     () => {},
   );
 
+  state.setCamera = setCamera;
   if (fragment.camera) setCamera(fragment.camera);
   window.addEventListener("hashchange", () => {
     try {

@@ -68,7 +68,49 @@ class Coverage {
   std::unordered_map<geo::TileKey, tiles::Raster, geo::TileKeyHash> raw_;
 };
 
+// The drawn mesh's point above (lon, lat) in quad `at`: of the refined mesh
+// when there is one.
+Result<Vec3> drawn_point(MeshEvaluator& mesh, std::optional<RefinedEvaluator>& refined,
+                         const SelectedQuad& at, double lon, double lat) {
+  if (!refined) return mesh.mesh_point(at, lon, lat);
+  const std::optional<Vec3> p = RELIEF_TRY(refined->point(at, lon, lat));
+  if (!p) {
+    return fail(fmt::format("refined mesh: no triangle of quad {} holds {},{}", at.key.to_string(),
+                            lon, lat));
+  }
+  return *p;
+}
+
+// Pixels between the projections of `data` and `drawn`; none when the data
+// point is off screen.
+std::optional<double> screen_distance(const View& view, const Vec3& data, const Vec3& drawn) {
+  double ax, ay, bx, by;
+  if (!view.project(data, ax, ay) || !view.project(drawn, bx, by)) return std::nullopt;
+  if (ax < 0 || ay < 0 || ax >= view.width || ay >= view.height) return std::nullopt;
+  return std::hypot(ax - bx, ay - by);
+}
+
 }  // namespace
+
+Result<std::vector<std::optional<double>>> measure_screen_error_at(
+    const View& view, TerrainModel& terrain, const Selection& selection,
+    std::span<const DataPoint> points, const RefinedMesh* refined) {
+  MeshEvaluator mesh(terrain, selection);
+  std::optional<RefinedEvaluator> refined_mesh;
+  if (refined) refined_mesh.emplace(terrain, selection, *refined);
+  std::vector<std::optional<double>> out;
+  out.reserve(points.size());
+  for (const DataPoint& p : points) {
+    const SelectedQuad* at = mesh.containing(p.lon, p.lat);
+    if (!at || !std::isfinite(p.height)) {
+      out.emplace_back();
+      continue;
+    }
+    const Vec3 drawn = RELIEF_TRY(drawn_point(mesh, refined_mesh, *at, p.lon, p.lat));
+    out.push_back(screen_distance(view, ecef(p.lon, p.lat, p.height), drawn));
+  }
+  return out;
+}
 
 Result<MeasuredError> measure_screen_error(const View& view, TerrainModel& terrain,
                                            const Selection& selection, const geo::GeoBox& extent,
@@ -108,20 +150,10 @@ Result<MeasuredError> measure_screen_error(const View& view, TerrainModel& terra
     const double height =
         tile->f32()[static_cast<size_t>(j + b) * static_cast<size_t>(tile->width()) +
                     static_cast<size_t>(i + b)];
-    Vec3 on_mesh;
-    if (refined_mesh) {
-      const std::optional<Vec3> p = RELIEF_TRY(refined_mesh->point(*at, slon, slat));
-      if (!p)
-        return fail(fmt::format("refined mesh: no triangle of quad {} holds {},{}",
-                                at->key.to_string(), slon, slat));
-      on_mesh = *p;
-    } else {
-      on_mesh = RELIEF_TRY(mesh.mesh_point(*at, slon, slat));
-    }
-    double ax, ay, bx, by;
-    if (!view.project(ecef(slon, slat, height), ax, ay) || !view.project(on_mesh, bx, by)) continue;
-    if (ax < 0 || ay < 0 || ax >= view.width || ay >= view.height) continue;
-    out.max_pixels = std::max(out.max_pixels, std::hypot(ax - bx, ay - by));
+    const Vec3 on_mesh = RELIEF_TRY(drawn_point(mesh, refined_mesh, *at, slon, slat));
+    const std::optional<double> pixels = screen_distance(view, ecef(slon, slat, height), on_mesh);
+    if (!pixels) continue;
+    out.max_pixels = std::max(out.max_pixels, *pixels);
     ++out.samples;
   }
   return out;

@@ -461,6 +461,13 @@ Result<lod::MeasuredError> Scene::measure_last_frame(const lod::Camera& camera, 
                                    !impl_->options.interactive);
 }
 
+Result<std::vector<std::optional<double>>> Scene::measure_last_frame_at(
+    const lod::Camera& camera, std::span<const lod::DataPoint> points) {
+  const lod::View view = RELIEF_TRY(lod::make_view(camera));
+  if (!impl_->store) return std::vector<std::optional<double>>(points.size());  // no data
+  return lod::measure_screen_error_at(view, *impl_->terrain, impl_->last, points, last_refined());
+}
+
 stream::TileLoader* Scene::elevation_loader() {
   return impl_->loader.get();
 }

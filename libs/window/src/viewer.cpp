@@ -432,6 +432,7 @@ ViewerSummary Viewer::summary() const {
   s.complete =
       v.report && v.report->complete && v.threshold <= v.scene_options.selection.pixel_error;
   s.path_finished = v.controller->mode() == view::ControlMode::playback && v.controller->finished();
+  s.path_end = v.path_end;
   s.frames_list = v.frames;
   s.recorded = v.recorded;
   s.screenshots = v.screenshots;

@@ -1,7 +1,7 @@
 // Debian's Chromium, headless, WebGL on SwiftShader (no GPU), driven by
 // puppeteer-core (pinned in package.json, no browser download): a page of
 // relief serve opened and waited for until its window.relief says ready.
-// Shared by browser_view.cjs and browser_map.cjs.
+// Shared by browser_view.cjs, browser_map.cjs and bench/web-flight.cjs.
 "use strict";
 
 const fs = require("fs");
@@ -16,23 +16,19 @@ function fail(name, message) {
   process.exit(1);
 }
 
-// Opens request.url at request.width x request.height and waits up to
-// request.timeoutMs for window.relief.ready; a failed page or a timeout
-// ends the process with a message naming `name`. Returns {page,
-// consoleLines, timings, lap, close}.
-async function openReady(name, request) {
+// Launches the browser with a width x height viewport (device scale 1) in a
+// fresh profile (nothing cached). Returns {browser, close}; close() ends the
+// browser and removes the profile. Throws when the browser is missing.
+async function launchChromium(width, height) {
   if (!fs.existsSync(kChromium)) {
-    fail(name, `${kChromium} is missing: run scripts/setup.sh --web (Debian package chromium)`);
+    throw new Error(`${kChromium} is missing: run scripts/setup.sh --web (Debian package chromium)`);
   }
-  const timings = {};
-  const t0 = Date.now();
-  const lap = (what) => (timings[what] = Date.now() - t0);
   const profile = fs.mkdtempSync(path.join(os.tmpdir(), "relief-chromium-"));
   const browser = await puppeteer.launch({
     executablePath: kChromium,
     headless: true,
     userDataDir: profile,
-    defaultViewport: { width: request.width, height: request.height, deviceScaleFactor: 1 },
+    defaultViewport: { width, height, deviceScaleFactor: 1 },
     args: [
       "--no-sandbox",
       // WebGL without a GPU: ANGLE on SwiftShader (not --disable-gpu, which
@@ -45,13 +41,30 @@ async function openReady(name, request) {
       "--disable-sync",
       "--disable-quic",
       "--no-first-run",
-      `--window-size=${request.width},${request.height}`,
+      `--window-size=${width},${height}`,
     ],
   });
-  const close = async () => {
-    await browser.close();
-    fs.rmSync(profile, { recursive: true, force: true });
+  return {
+    browser,
+    close: async () => {
+      await browser.close();
+      fs.rmSync(profile, { recursive: true, force: true });
+    },
   };
+}
+
+// Opens request.url at request.width x request.height and waits up to
+// request.timeoutMs for window.relief.ready; a failed page or a timeout
+// ends the process with a message naming `name`. Returns {page,
+// consoleLines, timings, lap, close}.
+async function openReady(name, request) {
+  if (!fs.existsSync(kChromium)) {
+    fail(name, `${kChromium} is missing: run scripts/setup.sh --web (Debian package chromium)`);
+  }
+  const timings = {};
+  const t0 = Date.now();
+  const lap = (what) => (timings[what] = Date.now() - t0);
+  const { browser, close } = await launchChromium(request.width, request.height);
   lap("launched");
   const page = await browser.newPage();
   const consoleLines = [];
@@ -94,4 +107,4 @@ async function openReady(name, request) {
   return { page, consoleLines, timings, lap, close };
 }
 
-module.exports = { openReady, fail };
+module.exports = { launchChromium, openReady, fail, puppeteer };

@@ -9,6 +9,9 @@
 // above the store's finest level not where the drawn level's full mesh
 // reaches nodata (the fall-off at the data's edge and at voids).
 #include <cstddef>
+#include <optional>
+#include <span>
+#include <vector>
 
 #include "relief/base/result.h"
 #include "relief/geo/tile_key.h"
@@ -32,5 +35,20 @@ Result<MeasuredError> measure_screen_error(const View& view, TerrainModel& terra
                                            const Selection& selection, const geo::GeoBox& extent,
                                            int samples, const RefinedMesh* refined = nullptr,
                                            bool read_tiles = true);
+
+// A point of the data: longitude, latitude (degrees) and its height there.
+struct DataPoint {
+  double lon = 0, lat = 0, height = 0;
+};
+
+// The same measure at given points (heights read by the caller, so another
+// client's frame can be measured against the same data: bench/web): per
+// point, the distance in pixels between the data point and the drawn mesh's
+// point above its longitude and latitude, both projected; nullopt where the
+// selection draws no quad there, the data point is off screen or its height
+// is not finite (nodata).
+Result<std::vector<std::optional<double>>> measure_screen_error_at(
+    const View& view, TerrainModel& terrain, const Selection& selection,
+    std::span<const DataPoint> points, const RefinedMesh* refined = nullptr);
 
 }  // namespace relief::lod

@@ -13,6 +13,7 @@
 #include <functional>
 #include <memory>
 #include <optional>
+#include <span>
 #include <vector>
 
 #include "relief/base/clock.h"
@@ -190,6 +191,10 @@ class Scene {
   // The last frame's measured screen error (lod/measured_error.h) over
   // `samples` random finest samples.
   Result<lod::MeasuredError> measure_last_frame(const lod::Camera& camera, int samples);
+  // The same at given data points (lod::measure_screen_error_at): pixels per
+  // point, nullopt where the last frame drew nothing there or it is off screen.
+  Result<std::vector<std::optional<double>>> measure_last_frame_at(
+      const lod::Camera& camera, std::span<const lod::DataPoint> points);
   // Null for complete frames (no loaders) or without imagery.
   stream::TileLoader* elevation_loader();
   stream::TileLoader* imagery_loader();

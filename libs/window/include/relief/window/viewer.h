@@ -141,6 +141,9 @@ struct ViewerSummary {
   std::vector<ViewerFrame> frames_list;       // collect_frames only
   std::vector<lod::Keyframe> recorded;        // the cameras recorded
   std::vector<std::string> screenshots;       // files written by F12
+  // exit_when_done: the clock time (ViewerFrame::time) of the first frame
+  // drawn at the path's end (or, without a path, of the first frame).
+  std::optional<double> path_end;
   // The errors of tiles (elevation, imagery) whose last load failed, each
   // naming the tile's file: a corrupt or missing tile the view went without.
   std::vector<std::string> unreadable_tiles;
