@@ -21,24 +21,11 @@ Result<std::shared_ptr<const web::RasterTiler>> raster_tiler(
   return std::make_shared<const web::RasterTiler>(std::move(tiler));
 }
 
-}  // namespace
-
-Result<std::shared_ptr<web::WebService>> make_web_service(const Args& args, const std::string& root,
-                                                          pipeline::ElevationProcessing elevation,
-                                                          web::WebServiceOptions options) {
+// The tiles of STORE (and --imagery) for web clients.
+Result<web::WebLayers> layers_of(const Args& args, const std::string& root,
+                                 pipeline::ElevationProcessing elevation) {
   web::WebLayers layers;
-  auto opened = open_store(root);
-  const bool layer_options = !args.get_all("--elevation").empty() || !elevation.empty() ||
-                             args.get("--imagery").has_value();
-  if (!opened && !layer_options) {
-    // The store's files are still served as they are (a client may need
-    // them to learn what is wrong, e.g. a store to upgrade): no web tiles.
-    std::fprintf(stderr, "relief serve: no web tiles: %s\n", opened.error().message.c_str());
-    return options.pages.empty()
-               ? nullptr
-               : std::make_shared<web::WebService>(std::move(layers), std::move(options));
-  }
-  const tiles::Store plain = RELIEF_TRY(std::move(opened));
+  const tiles::Store plain = RELIEF_TRY(open_store(root));
   const auto kind = plain.manifest().kind;
   if (kind == tiles::DatasetKind::Elevation) {
     auto store = std::make_shared<const tiles::Store>(
@@ -65,8 +52,29 @@ Result<std::shared_ptr<web::WebService>> make_web_service(const Args& args, cons
     layers.imagery =
         RELIEF_TRY(raster_tiler(std::make_shared<const tiles::Store>(std::move(store))));
   }
-  if (!layers.terrain && !layers.dem && !layers.imagery && options.pages.empty()) return nullptr;
-  return std::make_shared<web::WebService>(std::move(layers), std::move(options));
+  return layers;
+}
+
+}  // namespace
+
+Result<std::shared_ptr<web::WebService>> make_web_service(const Args& args, const std::string& root,
+                                                          pipeline::ElevationProcessing elevation,
+                                                          web::WebServiceOptions options) {
+  const bool layer_options = !args.get_all("--elevation").empty() || !elevation.empty() ||
+                             args.get("--imagery").has_value();
+  auto layers = layers_of(args, root, std::move(elevation));
+  if (!layers) {
+    // Asked for: an error. Otherwise the store's files are still served as
+    // they are (a client may need them to learn what is wrong, e.g. a store
+    // to upgrade, or tiles of a size web tiles are not made from).
+    if (layer_options) return std::unexpected(layers.error());
+    std::fprintf(stderr, "relief serve: no web tiles: %s\n", layers.error().message.c_str());
+    layers = web::WebLayers{};
+  }
+  if (!layers->terrain && !layers->dem && !layers->imagery && options.pages.empty()) {
+    return nullptr;
+  }
+  return std::make_shared<web::WebService>(std::move(*layers), std::move(options));
 }
 
 }  // namespace relief::cli

@@ -206,3 +206,31 @@ TEST_F(ServeRoutes, ImageryAndFusedElevationFromTheCommandLine) {
 
 }  // namespace
 }  // namespace relief::web
+
+namespace relief::web {
+namespace {
+
+// A store web tiles are not made from (tiles of another size) is still
+// served file by file, with a note on stderr; asked for, it is an error.
+TEST(ServeWithoutWebTiles, AStoreOfOtherTileSizesIsServedFileByFile) {
+  testing::ScratchDir dir("serve_small_tiles");
+  const std::string store = (dir / "store").string();
+  ASSERT_EQ(testing::run_relief({"build", testing::data("srtm/N42E001.hgt.zip"), "--kind",
+                                 "elevation", "-o", store, "--tile-size", "128x64", "-q"})
+                .exit_code,
+            0);
+  const int port = testing::free_port();
+  const int pid = testing::spawn_relief({"serve", store, "--port", std::to_string(port)});
+  testing::wait_for(port);
+  EXPECT_EQ(get(port, "/manifest.json").status, 200);
+  EXPECT_EQ(get(port, "/terrain/layer.json").status, 404);
+  ::kill(pid, SIGTERM);
+  int status = -1;
+  ::waitpid(pid, &status, 0);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+  EXPECT_TRUE(testing::is_one_line_error(
+      testing::run_relief({"serve", store, "--port", "0", "--elevation", store}), "256"));
+}
+
+}  // namespace
+}  // namespace relief::web
