@@ -138,10 +138,11 @@ int run_serve(const std::vector<std::string>& argv) {
     web_options.pages = web::web_root_mounts(*web_root);
     for (const auto& mount : web_options.pages) {
       if (std::filesystem::is_directory(mount.dir)) continue;
-      std::fprintf(stderr,
-                   "relief serve: %s is missing: %s answers 404 (scripts/setup.sh --web installs it "
-                   "with npm ci --prefix web)\n",
-                   mount.dir.c_str(), mount.prefix.c_str());
+      std::fprintf(
+          stderr,
+          "relief serve: %s is missing: %s answers 404 (scripts/setup.sh --web installs it "
+          "with npm ci --prefix web)\n",
+          mount.dir.c_str(), mount.prefix.c_str());
     }
   }
   auto web =

@@ -74,7 +74,8 @@ class BrowserView : public testing::SmallStoreSuite {
         {fs::path(RELIEF_WEB_JS_DIR) / "node_modules/puppeteer-core", "puppeteer-core"},
         {fs::path(RELIEF_WEB_ROOT) / "node_modules/cesium/Build/Cesium/Cesium.js", "CesiumJS"}};
     for (const auto& [path, what] : needed) {
-      ASSERT_TRUE(fs::exists(path)) << what << " (" << path << ") is missing: run scripts/setup.sh --web";
+      ASSERT_TRUE(fs::exists(path))
+          << what << " (" << path << ") is missing: run scripts/setup.sh --web";
     }
   }
 };

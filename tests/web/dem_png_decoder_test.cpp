@@ -11,8 +11,8 @@
 #include "relief/base/file_io.h"
 #include "relief/tiles/store.h"
 #include "relief/web/web_mercator.h"
-#include "web_js.h"
 #include "test_support.h"
+#include "web_js.h"
 
 namespace relief::web {
 namespace {

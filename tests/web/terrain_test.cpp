@@ -283,8 +283,9 @@ TEST_F(Terrain, ExportOfFusedAndProcessedElevation) {
   testing::ScratchDir dir("terrain_layers");
   const std::string s = store_path().string();
   const auto run = [&](const std::string& out, std::vector<std::string> extra) {
-    std::vector<std::string> args = {"export", s,   "--format", "quantized-mesh", "--max-level",
-                                     "9",      "-o", (dir / out).string(), "-q"};
+    std::vector<std::string> args = {"export",      s,   "--format", "quantized-mesh",
+                                     "--max-level", "9", "-o",       (dir / out).string(),
+                                     "-q"};
     args.insert(args.end(), extra.begin(), extra.end());
     return testing::run_relief(args);
   };
@@ -301,10 +302,10 @@ TEST_F(Terrain, ExportOfFusedAndProcessedElevation) {
   EXPECT_EQ(*plain, *fused) << "the mean of a store with itself is the store";
   const auto a = decode_quantized_mesh(gunzip(*plain)), b = decode_quantized_mesh(gunzip(*smooth));
   EXPECT_LT(b.max_height - b.min_height, a.max_height - a.min_height) << "smoothed";
-  EXPECT_TRUE(testing::is_one_line_error(
-      testing::run_relief({"export", s, "--level", "3", "--elevation-op", "mean", "-o",
-                           (dir / "x.tif").string()}),
-      "--elevation-op"));
+  EXPECT_TRUE(
+      testing::is_one_line_error(testing::run_relief({"export", s, "--level", "3", "--elevation-op",
+                                                      "mean", "-o", (dir / "x.tif").string()}),
+                                 "--elevation-op"));
 }
 
 }  // namespace

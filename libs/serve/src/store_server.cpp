@@ -315,13 +315,12 @@ bool Loop::serve_buffered(Connection& c, Clock::time_point now) {
     } else {
       const auto request = parse_request_head(std::string_view(c.in).substr(0, end + 4));
       c.in.erase(0, end + 4);
-      start_answer(c,
-                   request
-                       ? answer_request(server_.options_.root, *request,
-                                        server_.options_.share_index, server_.options_.share_count,
-                                        server_.options_.generate)
-                       : status_answer(400, false),
-                   now);
+      start_answer(
+          c,
+          request ? answer_request(server_.options_.root, *request, server_.options_.share_index,
+                                   server_.options_.share_count, server_.options_.generate)
+                  : status_answer(400, false),
+          now);
     }
     if (write_some(c, now) == Progress::closed) return false;
   }
