@@ -38,9 +38,12 @@ void give_up_huge_pages();
 // (decay), and a frame's buffers freed at its end were among them: every few
 // frames the next one faulted them in again, zero-filled (on bench/stream's
 // Himalaya flight every tenth frame took 7 ms more refinement and 15 ms more
-// in all, the p99 frame 1.55 times the p50 instead of 1.37). Caches hold
-// their byte budgets whatever the allocator keeps; the process's resident
-// memory stays at its peak. Overrides MALLOC_CONF's decay settings.
+// in all, the p99 frame 1.55 times the p50 instead of 1.37). Only the calling
+// (render) thread's arena and the one serving blocks over 8 MiB: the loaders'
+// threads free evicted tiles, which their arenas return after the decay (a
+// long flight's resident memory stayed 1.04 GiB under a 256 MiB budget when
+// every arena kept them, 0.69-0.78 GiB so). Overrides MALLOC_CONF's decay
+// settings for those two arenas.
 void keep_freed_memory();
 
 // For the same commands, on the thread that will draw the frames, after

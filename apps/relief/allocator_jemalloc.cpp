@@ -140,19 +140,26 @@ void prefault_in_background(uint64_t bytes) {
 }
 
 void keep_freed_memory() {
+  // Only where the frames' buffers live: the calling (render) thread's arena,
+  // and the one arena every block over 8 MiB comes from (texture arrays and
+  // their prefaulted growth). The loaders' threads free what they decoded
+  // as tiles leave the caches; their arenas return it to the kernel after
+  // jemalloc's decay, so the process stays near its caches' budget.
   ssize_t never = -1;
-  for (const char* name : {"arenas.dirty_decay_ms", "arenas.muzzy_decay_ms"}) {  // arenas to come
-    mallctl(name, nullptr, nullptr, &never, sizeof never);
-  }
-  unsigned arenas = 0;
-  size_t size = sizeof arenas;
-  if (mallctl("arenas.narenas", &arenas, &size, nullptr, 0) != 0) return;
-  // An arena not made yet refuses: it will follow the defaults set above.
-  for (unsigned i = 0; i < arenas; ++i) {
+  const auto keep = [&never](unsigned arena) {
     for (const char* kind : {"dirty", "muzzy"}) {
-      const std::string name = fmt::format("arena.{}.{}_decay_ms", i, kind);
+      const std::string name = fmt::format("arena.{}.{}_decay_ms", arena, kind);
       mallctl(name.c_str(), nullptr, nullptr, &never, sizeof never);
     }
+  };
+  unsigned arena = 0;
+  size_t size = sizeof arena;
+  if (mallctl("thread.arena", &arena, &size, nullptr, 0) == 0) keep(arena);
+  constexpr size_t kLarge = size_t{16} << 20;
+  if (void* large = std::malloc(kLarge)) {
+    size = sizeof arena;
+    if (mallctl("arenas.lookup", &arena, &size, &large, sizeof large) == 0) keep(arena);
+    std::free(large);
   }
 }
 

@@ -77,7 +77,11 @@ options:
                      distance to the drawn mesh is measured (default 20000
                      for a still, 500 per frame of a path, ~45 ms a frame
                      over the Pyrenees; 0: not measured)
-  --gpu-budget SIZE  GPU texture cache (L3) budget (default 1GiB)
+  --memory-budget SIZE  every tile cache in main memory (default 2GiB): decoded
+                     tiles, their diamond errors, imagery, and on a software
+                     rasteriser (llvmpipe) the GPU texture cache (L3) too
+  --gpu-budget SIZE  GPU texture cache (L3) budget (default 1GiB on a GPU; on a
+                     software rasteriser a share of --memory-budget unless given)
   --cache DIR        for a store given as http:// URL(s): keep fetched files under DIR
   --cache-size SIZE  budget of that disk cache (L1, default 1GiB; a file larger than
                      it is not kept: 0 keeps nothing)
@@ -90,8 +94,6 @@ options:
 path options:
   --mode M           interactive (default) or complete
   --fps N            frames per second (default: the path's, else 30)
-  --memory-budget SIZE  decoded tiles in memory (L2, default 512MiB)
-  --imagery-budget SIZE  decoded imagery tiles in memory (default 512MiB)
   --loads N          loads in flight (default 8)
   --no-prefetch      do not load ahead along the camera's motion
   --pager P          priority (default) or radius:K (every tile within K tile
@@ -185,7 +187,6 @@ int render_still(const Args& args, RenderSetup& setup) {
   // (--full-resolution) has one vertex per finest sample, no deeper quads.
   view::SceneOptions so = scene_options(setup);
   so.interactive = false;
-  so.loader.memory_budget = uint64_t{512} << 20;
   auto context = render::GlContext::create_headless();
   if (!context) return report_error(context.error().message);
   auto target = render::make_offscreen_target(setup.width, setup.height);
@@ -262,8 +263,6 @@ int run_render(const std::vector<std::string>& command_line) {
                                               {"--simulate-bandwidth"},
                                               {"--mode"},
                                               {"--fps"},
-                                              {"--memory-budget"},
-                                              {"--imagery-budget"},
                                               {"--loads"},
                                               {"--no-prefetch", "", false},
                                               {"--pager"},

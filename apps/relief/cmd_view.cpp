@@ -94,6 +94,8 @@ options:
   --loader-nice N    run the tile loaders N nice levels below the render thread
                      (0-19, default %NICE%: frames first; 0 on a machine shared
                      with work that would starve them; docs/streaming.md)
+  --memory-budget SIZE  every tile cache in main memory (default 2GiB), the GPU
+                     cache too on a software rasteriser (as relief render)
   --fov, --exaggeration, --lod, --sky, --gpu-budget, --cache, --cache-size
                      as relief render
   --refine-threads N as relief render; by default one per core, but the
@@ -388,7 +390,6 @@ int view_session(const Args& args, RenderSetup& setup) {
   };
   view::SceneOptions so = scene_options(setup);
   so.interactive = true;
-  so.loader.memory_budget = uint64_t{512} << 20;
   // The render thread keeps a core while tiles are prepared (docs/streaming.md).
   so.loader.max_preparing = std::max(1, static_cast<int>(std::thread::hardware_concurrency()) - 1);
   so.lookahead_frames = 15;  // half a second ahead at 30 fps

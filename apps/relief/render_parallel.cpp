@@ -201,7 +201,6 @@ class Run {
   Result<std::unique_ptr<parallel::FrameRenderer>> start(RenderSetup& setup) {
     view::SceneOptions so = scene_options(setup);
     so.interactive = false;
-    so.loader.memory_budget = uint64_t{512} << 20;
     context_ = RELIEF_TRY(render::GlContext::create_headless());
     return parallel::FrameRenderer::create(setup.store, setup.imagery ? &*setup.imagery : nullptr,
                                            so);

@@ -33,7 +33,6 @@ struct PathOptions {
   bool interactive = true;
   double fps = 0;  // 0: the path's
   stream::LoaderOptions loader;
-  uint64_t imagery_budget = uint64_t{512} << 20;  // the imagery loader's L2
   bool prefetch = true;
   double radius = 0;  // > 0: the radius pager
   double until_complete = 0;
@@ -49,7 +48,6 @@ struct PathOptions {
 
 Result<PathOptions> parse_path_options(const Args& args) {
   PathOptions o;
-  o.loader.memory_budget = uint64_t{512} << 20;
   if (auto mode = args.get("--mode")) {
     if (*mode != "interactive" && *mode != "complete") {
       return fail("--mode: '" + *mode + "' is neither interactive nor complete");
@@ -62,14 +60,6 @@ Result<PathOptions> parse_path_options(const Args& args) {
           fmt::format("--fps: must be in [{:g}, {:g}]", view::kMinPathFps, view::kMaxPathFps));
     }
     o.fps = *fps;
-  }
-  for (auto [name, budget] : {std::pair{"--memory-budget", &o.loader.memory_budget},
-                              std::pair{"--imagery-budget", &o.imagery_budget}}) {
-    if (auto size = args.get(name)) {
-      auto bytes = parse_byte_size(*size);
-      if (!bytes) return fail(fmt::format("{}: {}", name, bytes.error().message));
-      *budget = *bytes;
-    }
   }
   if (auto loads = RELIEF_TRY(args.get_int("--loads", 1, 256))) o.loader.max_in_flight = *loads;
   o.prefetch = !args.has("--no-prefetch");
@@ -209,9 +199,8 @@ int render_path(const Args& args, RenderSetup& setup, const Clock& clock) {
   // with --no-prefetch.
   const bool wait_complete = options->movie && options->prefetch && fetched_over_a_link(args);
   so.interactive = options->interactive || wait_complete;
-  so.loader = options->loader;
+  so.loader = options->loader;  // its memory budget is a share of so.memory_budget
   so.loader.worker_nice = setup.loader_nice;
-  so.imagery_budget = options->imagery_budget;
   so.prefetch = options->prefetch;
   so.lookahead_frames = 0.5 * fps;  // prefetch half a second ahead
   so.radius_tiles = options->radius;
@@ -273,6 +262,8 @@ int render_path(const Args& args, RenderSetup& setup, const Clock& clock) {
           {"uploads", frame.uploads},
           {"evicted", frame.gpu_evicted}}},
         {"rss_bytes", resident_set_bytes()},
+        {"cached_bytes", r.report.cached_bytes},
+        {"memory_budget_bytes", setup.memory_budget},
         {"exact_errors",
          {{"measured", terrain.error_counts().measured},
           {"prepared", terrain.error_counts().prepared}}}};

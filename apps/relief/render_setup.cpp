@@ -13,6 +13,7 @@
 #include "relief/pipeline/fused_elevation.h"
 #include "relief/render/terrain_renderer.h"
 #include "relief/tiles/codec.h"
+#include "relief/view/memory_budget.h"
 
 namespace relief::cli {
 
@@ -98,10 +99,13 @@ std::string help_with_layer_options(const char* help) {
 }
 
 std::vector<OptionSpec> with_scene_options(std::vector<OptionSpec> own) {
-  for (const char* name :
-       {"--imagery", "--detect-level", "--detect-sensitivity", "--elevation", "--fuse", "--weights",
-        "--camera", "--look-at", "--size", "--fov", "--pixel-error", "--exaggeration", "--lod",
-        "--sky", "--gpu-budget", "--cache", "--cache-size", "--loader-nice", "--refine-threads"}) {
+  for (const char* name : {"--imagery",       "--detect-level",  "--detect-sensitivity",
+                           "--elevation",     "--fuse",          "--weights",
+                           "--camera",        "--look-at",       "--size",
+                           "--fov",           "--pixel-error",   "--exaggeration",
+                           "--lod",           "--sky",           "--gpu-budget",
+                           "--memory-budget", "--cache",         "--cache-size",
+                           "--loader-nice",   "--refine-threads"}) {
     own.emplace_back(name);
   }
   own.emplace_back("--detect", "", false);
@@ -169,6 +173,13 @@ Result<RenderSetup> parse_render_setup(const Args& args, TextureLayers textures,
     }
   }
   s.gpu_budget = RELIEF_TRY(byte_option(args, "--gpu-budget", s.gpu_budget));
+  s.gpu_budget_given = args.has("--gpu-budget");
+  s.memory_budget = RELIEF_TRY(byte_option(args, "--memory-budget", s.memory_budget));
+  if (s.memory_budget < view::kMinimumMemoryBudget) {
+    return fail(fmt::format("--memory-budget: {} is below the smallest budget, {}",
+                            *args.get("--memory-budget"),
+                            format_bytes(view::kMinimumMemoryBudget)));
+  }
 
   StoreAccess access;
   access.cache_bytes = RELIEF_TRY(byte_option(args, "--cache-size", access.cache_bytes));
@@ -226,6 +237,8 @@ view::SceneOptions scene_options(const RenderSetup& setup) {
   so.refine_on_gpu = setup.refine_on_gpu;
   so.refine_threads = setup.refine_threads.value_or(0);  // one per core unless given
   so.gpu_budget = setup.gpu_budget;
+  so.gpu_budget_given = setup.gpu_budget_given;
+  so.memory_budget = setup.memory_budget;
   so.loader.worker_nice = setup.loader_nice;
   so.render.exaggeration = static_cast<float>(setup.exaggeration);
   so.render.sky = setup.sky;

@@ -31,6 +31,9 @@ struct RenderSetup {
   bool full_resolution = false;
   std::array<float, 3> sky{};
   uint64_t gpu_budget = uint64_t{1} << 30;
+  bool gpu_budget_given = false;  // --gpu-budget: L3 outside the memory budget's split
+  // --memory-budget: every tile cache in main memory (view/memory_budget.h).
+  uint64_t memory_budget = uint64_t{2} << 30;
   int loader_nice = 0;                         // --loader-nice: LoaderOptions::worker_nice
   std::optional<unsigned> refine_threads;      // --refine-threads (0: one per core)
   std::shared_ptr<net::DiskCache> disk_cache;  // L1, remote stores with --cache only

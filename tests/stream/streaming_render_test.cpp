@@ -212,13 +212,17 @@ TEST_F(StreamingRenderTest, DrapedImageryStreamsToo) {
   // Frames go beside the imagery store, not into it (refused: it would break the store).
   const json s = render_path("draped", still(kGround),
                              {"--imagery", imagery().string(), "--simulate-latency", "30",
-                              "--until-complete", "60", "--imagery-budget", "3MiB"});
+                              "--until-complete", "60", "--memory-budget", "32MiB"});
   const json& frames = s["frames"];
   ASSERT_GE(frames.size(), 3u);
   EXPECT_TRUE(s["summary"]["complete"].get<bool>());
   for (const json& f : frames) {
-    EXPECT_EQ(f["imagery_memory"]["budget_bytes"].get<uint64_t>(), 3u << 20);
-    EXPECT_LE(f["imagery_memory"]["resident_bytes"].get<uint64_t>(), 3u << 20) << f["frame"];
+    // The imagery's share of the one budget (view/memory_budget.h).
+    const auto budget = f["imagery_memory"]["budget_bytes"].get<uint64_t>();
+    EXPECT_GT(budget, 2u << 20);
+    EXPECT_LT(budget, 8u << 20);
+    EXPECT_LE(f["imagery_memory"]["resident_bytes"].get<uint64_t>(), budget) << f["frame"];
+    EXPECT_LE(f["cached_bytes"].get<uint64_t>(), 32u << 20) << f["frame"];
   }
   EXPECT_GT(frames.back()["imagery_memory"]["loaded"].get<int>(), 1);
   const fs::path ref = scratch("imagery-still.png");
@@ -302,27 +306,40 @@ TEST_F(StreamingRenderTest, ASuddenTurnIsFollowedByACompleteView) {
 }
 
 TEST_F(StreamingRenderTest, BudgetsHoldAlongALongPath) {
-  const uint64_t memory = 3 << 20, gpu = 6 << 20;
+  // One budget for every tile cache in main memory: the decoded tiles, their
+  // diamond errors, and (llvmpipe here) the GPU's texture arrays.
+  const uint64_t budget = 32 << 20;
   const json s = render_path("long",
                              "{\"time\": 0, \"camera\": [1.05, 42.05, 3000, 45, -30, 0]},"
                              "{\"time\": 3, \"camera\": [1.95, 42.95, 3000, 45, -30, 0]},"
                              "{\"time\": 6, \"camera\": [1.05, 42.95, 3000, 270, -30, 0]},"
                              "{\"time\": 9, \"camera\": [1.05, 42.05, 3000, 180, -30, 0]},"
                              "{\"time\": 12, \"camera\": [1.95, 42.95, 3000, 45, -30, 0]}",
-                             {"--memory-budget", "3MiB", "--gpu-budget", "6MiB", "--no-frames"});
+                             {"--memory-budget", "32MiB", "--no-frames"});
   const json& frames = s["frames"];
   ASSERT_EQ(frames.size(), 121u);
   uint64_t evicted = 0, rss_early = 0, rss_max = 0;
+  size_t over = 0;
   for (size_t i = 0; i < frames.size(); ++i) {
     const json& f = frames[i];
-    EXPECT_LE(f["memory"]["resident_bytes"].get<uint64_t>(), memory) << i;
-    EXPECT_LE(f["gpu"]["bytes"].get<uint64_t>(), gpu) << i;
+    EXPECT_EQ(f["memory_budget_bytes"].get<uint64_t>(), budget);
+    // The diamond errors of the tiles the last two frames held stay even over
+    // their share (lod::RefineCache): a turn may pass the budget for a while.
+    const auto cached = f["cached_bytes"].get<uint64_t>();
+    EXPECT_LE(cached, budget + budget / 4) << i;
+    over += cached > budget;
+    EXPECT_LE(f["memory"]["resident_bytes"].get<uint64_t>(),
+              f["memory"]["budget_bytes"].get<uint64_t>())
+        << i;
+    EXPECT_LE(f["gpu"]["allocated_bytes"].get<uint64_t>(), f["gpu"]["budget_bytes"].get<uint64_t>())
+        << i;
     evicted = f["memory"]["evicted"].get<uint64_t>();
     // Allocators and driver settle during the first laps; then flat.
     if (i == 60) rss_early = f["rss_bytes"].get<uint64_t>();
     if (i >= 60) rss_max = std::max(rss_max, f["rss_bytes"].get<uint64_t>());
   }
-  EXPECT_GT(evicted, 0u);  // the budget was tight enough to matter
+  EXPECT_LT(over, frames.size() / 4);  // mostly within
+  EXPECT_GT(evicted, 0u);              // the budget was tight enough to matter
   EXPECT_LT(rss_max, rss_early + (32 << 20)) << "resident set grew along the path";
   // Frame after frame, jemalloc keeps what the frames free (apps/relief/allocator.h) and
   // memory stays flat all the same (above). The system malloc (sanitizer builds) says nothing.

@@ -1,6 +1,8 @@
 #include <EGL/egl.h>
 #include <EGL/eglext.h>
 
+#include <string>
+
 #include <fmt/format.h>
 
 #include "gl.h"
@@ -29,6 +31,13 @@ class EglContext final : public GlContext {
 };
 
 }  // namespace
+
+bool software_rasteriser() {
+  const auto* name = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
+  const std::string renderer = name ? name : "";
+  return renderer.find("llvmpipe") != std::string::npos ||
+         renderer.find("softpipe") != std::string::npos;
+}
 
 Result<std::unique_ptr<GlContext>> GlContext::create_headless() {
   auto get_display = reinterpret_cast<PFNEGLGETPLATFORMDISPLAYEXTPROC>(

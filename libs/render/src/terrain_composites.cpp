@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include "gl_terrain_renderer.h"
+#include "relief/render/render_target.h"
 
 namespace relief::render {
 namespace {
@@ -23,10 +24,7 @@ Status GlTerrainRenderer::init_layers(std::vector<TextureLayer> layers) {
   if (layers.empty()) return {};
   gpu_ = RELIEF_TRY(gpuprocess::GpuProcessor::create());
   compositor_ = RELIEF_TRY(gpuprocess::Compositor::create());
-  const char* name = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
-  const std::string renderer = name ? name : "";
-  software_ = renderer.find("llvmpipe") != std::string::npos ||
-              renderer.find("softpipe") != std::string::npos;
+  software_ = software_rasteriser();
   for (size_t i = 0; i < layers.size(); ++i) {
     if (layers[i].store->manifest().max_level > layers[reference_].store->manifest().max_level) {
       reference_ = i;

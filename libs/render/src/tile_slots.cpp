@@ -51,10 +51,13 @@ uint64_t TileSlots::layer_bytes(bool imagery) const {
   return imagery ? imagery_.layer_bytes() : heights_.layer_bytes() + slopes_.layer_bytes();
 }
 
-int TileSlots::next_layers(int old, uint64_t layer_bytes) const {
-  // Double, but not past what the budget holds unless the frame needs it.
-  const int fits =
-      static_cast<int>(std::min<uint64_t>(budget_ / layer_bytes, uint64_t(max_layers_)));
+int TileSlots::next_layers(bool imagery, int old, uint64_t layer_bytes) const {
+  // Double, but not past what the budget holds beside the other kind's
+  // arrays unless the frame needs it.
+  const gl::TextureArray& other = imagery ? heights_ : imagery_;
+  const uint64_t other_bytes = static_cast<uint64_t>(other.layers()) * this->layer_bytes(!imagery);
+  const uint64_t room = budget_ > other_bytes ? budget_ - other_bytes : 0;
+  const int fits = static_cast<int>(std::min<uint64_t>(room / layer_bytes, uint64_t(max_layers_)));
   int layers = old == 0 ? kFirstLayers : old * 2;
   if (layers > fits) layers = std::max(fits, old + 16);
   return std::min(layers, max_layers_);
@@ -70,7 +73,7 @@ void TileSlots::announce_growth_ahead(bool imagery, bool composite) {
   const int in_use = layers - static_cast<int>(p.free.size());
   if (composite ? 4 * in_use < 3 * layers : 8 * p.pinned < 3 * layers) return;
   announced = layers;
-  const int next = next_layers(layers, layer_bytes(imagery));
+  const int next = next_layers(imagery, layers, layer_bytes(imagery));
   // Not a growth past what the budget holds: only a frame that needs more
   // makes one, and memory faulted in for it would mostly wait in vain.
   if (next < 2 * layers) return;
@@ -81,7 +84,7 @@ void TileSlots::announce_growth_ahead(bool imagery, bool composite) {
 void TileSlots::grow(bool imagery, uint64_t layer_bytes) {
   Pool p = pool(imagery);
   const int old = p.array.layers();
-  const int layers = next_layers(old, layer_bytes);
+  const int layers = next_layers(imagery, old, layer_bytes);
   p.array.reserve(layers);
   if (!imagery) slopes_.reserve(layers);
   for (int l = layers - 1; l >= old; --l) p.free.push_back(l);

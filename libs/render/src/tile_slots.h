@@ -125,8 +125,9 @@ class TileSlots {
   // Bytes of one layer of a kind: imagery, or heights with their slopes.
   uint64_t layer_bytes(bool imagery) const;
   // Layers an array of `old` layers grows to: the first kFirstLayers, then
-  // doubling within the budget (`layer_bytes`: of the kind's arrays).
-  int next_layers(int old, uint64_t layer_bytes) const;
+  // doubling within what the budget holds beside the other kind's arrays
+  // (`layer_bytes`: of the kind's arrays).
+  int next_layers(bool imagery, int old, uint64_t layer_bytes) const;
   // Adds layers to a kind's array (next_layers()), all free.
   void grow(bool imagery, uint64_t layer_bytes);
   // set_on_growth_ahead()'s call, after a tile is pinned (found or inserted).

@@ -15,8 +15,10 @@
 #include "relief/lod/split_feedback.h"
 #include "relief/render/gl_refine_criteria.h"
 #include "relief/render/overlay.h"
+#include "relief/render/render_target.h"
 #include "relief/stream/radius_pager.h"
 #include "relief/view/ground.h"
+#include "relief/view/memory_budget.h"
 
 namespace relief::view {
 
@@ -84,6 +86,7 @@ struct Scene::Impl {
   // moved too little to change them (the same mesh, at a fraction of the cost).
   lod::RefineHistory refine_history;
   uint64_t imagery_misses = 0;                 // a frame that missed imagery is not complete
+  bool gpu_in_memory = false;                  // L3 is main memory (software rasteriser)
   std::optional<lod::Camera> prefetch_camera;  // set_prefetch_camera()
   bool frozen = false;                         // set_selection_frozen()
   // SceneOptions::uploads_per_frame: the tiles not on the GPU this frame's
@@ -100,10 +103,23 @@ struct Scene::Impl {
       : store(s), imagery(i), options(o), clock(c), mesh(mesh_level(s, o)) {
     if (edge_marks()) {
       options.selection.neighbour_indices = true;  // refinement walks across quads
-      refine_cache = std::make_unique<lod::RefineCache>(options.loader.memory_budget);
+      refine_cache = std::make_unique<lod::RefineCache>(options.diamond_error_budget
+                                                            ? options.diamond_error_budget
+                                                            : options.loader.memory_budget);
       auto pool = std::make_unique<PooledExecutor>(options.refine_threads);
       if (pool->concurrency() > 1) refine_threads = std::move(pool);
     }
+  }
+
+  // What SceneOptions::memory_budget bounds, as it stands: the loaders'
+  // resident tiles, the diamond errors, and L3 where it is main memory.
+  uint64_t cached_bytes(const render::FrameStats& draw) const {
+    uint64_t bytes = refine_cache ? refine_cache->bytes() : 0;
+    if (loader) bytes += loader->stats().resident_bytes;
+    if (imagery_loader) bytes += imagery_loader->stats().resident_bytes;
+    for (const auto& l : layer_loaders) bytes += l->stats().resident_bytes;
+    if (gpu_in_memory) bytes += draw.gpu_allocated_bytes;
+    return bytes;
   }
 
   bool edge_marks() const {
@@ -219,13 +235,30 @@ Result<std::unique_ptr<Scene>> Scene::create(const tiles::Store* elevation,
       o.selection.max_level = o.selection.texture->manifest().max_level;
     }
   }
+  bool gpu_in_memory = false;
+  if (o.memory_budget) {
+    CacheUse use;
+    use.diamond_errors =
+        elevation && o.selection.mode == lod::LodMode::edge_marks && !o.full_resolution;
+    use.textures = imagery ? 1 : static_cast<int>(o.texture_layers.size());
+    use.composites = !o.texture_layers.empty();
+    use.gpu_in_memory = render::software_rasteriser();
+    gpu_in_memory = use.gpu_in_memory;
+    if (o.gpu_budget_given) use.gpu_given = o.gpu_budget;
+    const CacheBudgets b = RELIEF_TRY(split_memory_budget(o.memory_budget, use));
+    o.loader.memory_budget = b.elevation;
+    o.diamond_error_budget = b.diamond_errors;
+    if (use.textures) o.imagery_budget = b.texture_each;
+    if (b.gpu) o.gpu_budget = *b.gpu;
+  }
   auto impl = std::make_unique<Impl>(elevation, imagery, o, clock);
+  impl->gpu_in_memory = gpu_in_memory;
   std::vector<render::TextureLayer> layers = options.texture_layers;
   if (options.interactive) {
-    stream::LoaderOptions lo = options.loader;
+    stream::LoaderOptions lo = o.loader;
     lo.clock = &clock;
     impl->changes->listener = options.on_change;
-    lo.on_settled = [own = options.loader.on_settled, changes = impl->changes] {
+    lo.on_settled = [own = o.loader.on_settled, changes = impl->changes] {
       if (own) own();
       changes->announce();
     };
@@ -241,7 +274,7 @@ Result<std::unique_ptr<Scene>> Scene::create(const tiles::Store* elevation,
     } else {
       impl->terrain = std::make_unique<lod::TerrainModel>(nullptr, impl->mesh, 0);
     }
-    lo.memory_budget = options.imagery_budget;
+    lo.memory_budget = o.imagery_budget;
     if (imagery) impl->imagery_loader = RELIEF_TRY(stream::TileLoader::create(*imagery, lo));
     for (render::TextureLayer& l : layers) {
       impl->layer_loaders.push_back(RELIEF_TRY(stream::TileLoader::create(*l.store, lo)));
@@ -249,15 +282,15 @@ Result<std::unique_ptr<Scene>> Scene::create(const tiles::Store* elevation,
     }
   } else {
     impl->terrain =
-        std::make_unique<lod::TerrainModel>(elevation, impl->mesh, options.loader.memory_budget);
+        std::make_unique<lod::TerrainModel>(elevation, impl->mesh, o.loader.memory_budget);
     for (render::TextureLayer& l : layers) l.tiles = nullptr;  // read when needed
   }
   if (layers.empty()) {
     impl->renderer = RELIEF_TRY(render::TerrainRenderer::create(
-        *impl->terrain, imagery, options.gpu_budget, impl->imagery_loader.get()));
+        *impl->terrain, imagery, o.gpu_budget, impl->imagery_loader.get()));
   } else {
     impl->renderer = RELIEF_TRY(
-        render::TerrainRenderer::create(*impl->terrain, std::move(layers), options.gpu_budget));
+        render::TerrainRenderer::create(*impl->terrain, std::move(layers), o.gpu_budget));
   }
   const auto announce = [changes = impl->changes] { changes->announce(); };
   if (options.interactive) impl->renderer->set_on_processed(announce);
@@ -378,6 +411,7 @@ Result<FrameReport> Scene::draw(const lod::Camera& camera, render::RenderTarget&
         report.complete && is.queued == 0 && is.in_flight == 0 && is.misses == m.imagery_misses;
     m.imagery_misses = is.misses;
   }
+  report.cached_bytes = m.cached_bytes(report.draw);
   m.last = std::move(selection);
   m.last_refined = std::move(refined);
   m.previous = camera;

@@ -39,6 +39,11 @@ class GlContext {
   virtual std::string renderer() const = 0;  // GL_RENDERER and GL_VERSION
 };
 
+// Whether the GL context current on this thread rasterises on the CPU (Mesa's
+// llvmpipe or softpipe): its textures are main memory, so the GPU cache (L3)
+// counts against a memory budget (view/memory_budget.h).
+bool software_rasteriser();
+
 // An offscreen framebuffer: RGBA8 colour and a 32-bit float depth buffer
 // (reversed-Z). Needs a current GL context.
 Result<std::unique_ptr<RenderTarget>> make_offscreen_target(int width, int height);

@@ -35,11 +35,19 @@ struct SceneOptions {
   stream::LoaderOptions loader;  // elevation; its memory budget also bounds complete frames' cache
   uint64_t imagery_budget = uint64_t{512} << 20;  // the imagery loader's memory budget
   uint64_t gpu_budget = uint64_t{1} << 30;
+  // > 0: one budget for every tile cache the scene keeps in main memory,
+  // split by split_memory_budget (memory_budget.h) into loader.memory_budget,
+  // diamond_error_budget and imagery_budget, and gpu_budget too when the GL
+  // rasterises on the CPU unless gpu_budget_given. 0: the budgets as set.
+  uint64_t memory_budget = 0;
+  bool gpu_budget_given = false;
+  // Edge marks: the diamond errors' budget (0: loader.memory_budget again).
+  uint64_t diamond_error_budget = 0;
   int mesh_level = 4;
   // selection.mode == LodMode::edge_marks: each frame's quads are refined by
   // edge marks (lod/refine.h) with this variant, the per-diamond errors of
-  // data tiles cached within the loader's memory budget (loader.memory_budget
-  // again: they take ~8 times the bytes of the decoded tile).
+  // data tiles cached within diamond_error_budget (they take ~4 times the
+  // bytes of the decoded tile).
   lod::SelectionOptions selection;
   lod::RefineVariant refine_variant = lod::RefineVariant::kTopDown;
   // Threads that refine a frame's quads (top-down; the same mesh): 1, the
@@ -104,6 +112,10 @@ struct FrameReport {
   std::optional<lod::RefineStats> refine;  // edge-mark frames
   size_t refine_cache_tiles = 0;           // data tiles with cached diamond errors
   uint64_t refine_cache_bytes = 0;
+  // After the frame, the bytes SceneOptions::memory_budget bounds (the
+  // loaders' resident tiles, the diamond errors, and L3 when it is main
+  // memory; counted whether or not a memory budget was given, L3 only with one).
+  uint64_t cached_bytes = 0;
   render::FrameStats draw;
   double frame_seconds = 0;  // selection to the end of drawing, on the clock
   // Of frame_seconds on the clock: selection with its requests and prefetch
