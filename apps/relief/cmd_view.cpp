@@ -17,6 +17,7 @@
 #include "commands.h"
 #include "output_safety.h"
 #include "relief/base/file_io.h"
+#include "relief/base/memory_use.h"
 #include "relief/base/threads.h"
 #include "relief/lod/measured_error.h"
 #include "relief/stream/tile_loader.h"
@@ -299,6 +300,7 @@ nlohmann::json stats_json(const window::ViewerSummary& s, const std::string& ren
                       {"tiles_uploaded", f.tiles_uploaded},
                       {"uploads_deferred", f.uploads_deferred},
                       {"page_faults", f.page_faults},
+                      {"cached_bytes", f.cached_bytes},
                       {"pixel_error", f.pixel_error},
                       {"speed_factor", f.speed_factor},
                       {"budget_factor", f.budget_factor},
@@ -335,6 +337,8 @@ nlohmann::json stats_json(const window::ViewerSummary& s, const std::string& ren
       {"allocator", allocator_description()},
       {"refine_threads", refine_threads ? refine_threads : std::thread::hardware_concurrency()},
       {"uploads_per_frame", scene.uploads_per_frame},
+      {"memory_budget_bytes", scene.memory_budget},
+      {"peak_rss_bytes", peak_resident_set_bytes()},
       {"target_fps", target_fps(viewer)},
       {"loaders", std::move(loaders)}};
   return {{"summary", summary}, {"frames", frames}};

@@ -164,22 +164,29 @@ TEST(ViewCommand, TheLoadersWorkersRunAtTheirNiceAndPrepareWithinTheLimit) {
 
 // --uploads-per-frame reaches the scene: no frame of a session uploads more
 // new elevation tiles than asked (the first also its root tile), and the
-// session still ends complete. (Whether a frame has more to upload depends
+// session still ends complete. So does --memory-budget: the caches it bounds
+// stay within it (up to the diamond errors a frame's loads bring,
+// docs/streaming.md "One memory budget"). (Whether a frame has more to upload depends
 // on when the loads end; SceneTest.InteractiveFramesNeverWaitAndConvergeTo-
 // TheCompleteFrame holds splits back deterministically.)
 TEST(ViewCommand, NoFrameUploadsMoreNewTilesThanAsked) {
   ScratchDir dir("view_uploads");
   const auto path = dir / "path.json", stats = dir / "stats.json";
   write_path(path);
-  auto r =
-      run_relief({"view", store_path(), "--play", path.string(), "--exit-when-done", "--stats",
-                  stats.string(), "--size", "160x120", "--no-vsync", "--uploads-per-frame", "2"},
-                 kNoMesaLeakReport);
+  auto r = run_relief(
+      {"view", store_path(), "--play", path.string(), "--exit-when-done", "--stats", stats.string(),
+       "--size", "160x120", "--no-vsync", "--uploads-per-frame", "2", "--memory-budget", "128MiB"},
+      kNoMesaLeakReport);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const json s = read_json(stats);
   EXPECT_TRUE(s["summary"]["complete"].get<bool>());
   EXPECT_EQ(s["summary"]["uploads_per_frame"].get<uint32_t>(), 2u);
+  const uint64_t budget = uint64_t{128} << 20;
+  EXPECT_EQ(s["summary"]["memory_budget_bytes"].get<uint64_t>(), budget);
+  EXPECT_GT(s["summary"]["peak_rss_bytes"].get<uint64_t>(), 0u);
   for (const json& f : s["frames"]) {
+    EXPECT_GT(f["cached_bytes"].get<uint64_t>(), 0u);
+    EXPECT_LE(f["cached_bytes"].get<uint64_t>(), budget + budget / 4) << "frame " << f["frame"];
     EXPECT_LE(f["tiles_uploaded"].get<uint32_t>(), f["frame"].get<int>() == 0 ? 3u : 2u)
         << "frame " << f["frame"];
     EXPECT_TRUE(f.contains("uploads_deferred"));
@@ -350,6 +357,8 @@ TEST(ViewCommand, BadInputIsAOneLineError) {
   expect_error(run_relief({"view", store, "--target-fps", "fast"}), "--target-fps");
   expect_error(run_relief({"view", store, "--uploads-per-frame", "-1"}), "--uploads-per-frame");
   expect_error(run_relief({"view", store, "--uploads-per-frame", "many"}), "--uploads-per-frame");
+  expect_error(run_relief({"view", store, "--memory-budget", "1MiB"}), "--memory-budget");
+  expect_error(run_relief({"view", store, "--memory-budget", "lots"}), "--memory-budget");
   expect_error(run_relief({"view", store, "--play", not_json.string(), "--mode", "walk"}),
                "--play");
   expect_error(run_relief({"view", store, "--export-movie", (dir / "flight.png").string()}),

@@ -18,6 +18,12 @@ uint64_t resident_set_bytes() {
   return resident * static_cast<uint64_t>(sysconf(_SC_PAGESIZE));
 }
 
+uint64_t peak_resident_set_bytes() {
+  rusage u{};
+  if (getrusage(RUSAGE_SELF, &u) != 0) return 0;
+  return static_cast<uint64_t>(u.ru_maxrss) * 1024;  // kilobytes on Linux
+}
+
 uint64_t thread_page_faults() {
   rusage u{};
   if (getrusage(RUSAGE_THREAD, &u) != 0) return 0;

@@ -363,6 +363,7 @@ Result<bool> Viewer::frame() {
     f.submit_ms = report.draw.submit_seconds * 1e3;
     f.tiles_uploaded = report.draw.uploads;
     f.uploads_deferred = report.selection.deferred;
+    f.cached_bytes = report.cached_bytes;
     if (report.refine) {
       f.refine_ms = report.refine->seconds * 1e3;
       f.refine_cpu_ms = report.refine->cpu_seconds * 1e3;

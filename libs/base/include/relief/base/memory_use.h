@@ -7,6 +7,8 @@ namespace relief {
 
 // Resident set size in bytes (Linux /proc/self/statm), 0 if unknown.
 uint64_t resident_set_bytes();
+// The largest resident set so far (getrusage's ru_maxrss), 0 if unknown.
+uint64_t peak_resident_set_bytes();
 // Physical memory of the machine in bytes, 0 if unknown.
 uint64_t physical_memory_bytes();
 // Page faults the calling thread has taken so far (minor and major), for

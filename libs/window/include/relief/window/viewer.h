@@ -122,7 +122,8 @@ struct ViewerFrame {
   uint32_t tiles_uploaded = 0;  // tile textures uploaded by this frame (L3 misses)
   // Splits held back for the budget of uploads per frame (SelectionStats::deferred).
   uint32_t uploads_deferred = 0;
-  uint64_t page_faults = 0;  // on the render thread (view::FrameReport)
+  uint64_t page_faults = 0;   // on the render thread (view::FrameReport)
+  uint64_t cached_bytes = 0;  // what --memory-budget bounds (view::FrameReport)
   // CPU time of the whole process (render, loaders, llvmpipe's threads)
   // over the same period, idle waits included (the loaders work in them):
   // what a frame costs on a shared machine. 0 for the last frame.
