@@ -45,6 +45,8 @@ options:
   --bind ADDR    IPv4 address to listen on (default 127.0.0.1)
   --threads N    event-loop threads, each serving any number of connections
                  (default 16)
+  --generate-threads N  threads that make web tiles (default one per core);
+                 the event loops serve other requests meanwhile
   --share I/N    serve share I of a store spread over N servers: the tiles
                  whose Morton index modulo N is I (others get 404), the
                  manifest and level indices always. Readers name all N
@@ -91,8 +93,8 @@ int run_serve(const std::vector<std::string>& argv) {
   auto elevation = take_elevation_processing(rest);
   if (!elevation) return report_error(elevation.error().message);
   std::vector<OptionSpec> specs = {
-      {"--port"},         {"--bind"},          {"--threads"}, {"--max-connections"},
-      {"--read-timeout"}, {"--write-timeout"}, {"--share"},   {"--web-root"}};
+      {"--port"},          {"--bind"},  {"--threads"},  {"--max-connections"}, {"--read-timeout"},
+      {"--write-timeout"}, {"--share"}, {"--web-root"}, {"--generate-threads"}};
   for (auto& spec : serve_web_options()) specs.push_back(spec);
   auto args = Args::parse(rest, specs, "serve");
   if (!args) return report_error(args.error().message);
@@ -106,6 +108,9 @@ int run_serve(const std::vector<std::string>& argv) {
   auto threads = args->get_int("--threads", 1, 1024);
   if (!threads) return report_error(threads.error().message);
   o.threads = threads->value_or(16);
+  auto generators = args->get_int("--generate-threads", 1, 1024);
+  if (!generators) return report_error(generators.error().message);
+  o.generate_threads = generators->value_or(0);
   if (auto share = args->get("--share")) {
     const std::string_view form = "I/N with 0 <= I < N <= 4096";
     auto pair = parse_int_pair("--share", *share, '/', 0, 4096, form);
@@ -149,11 +154,16 @@ int run_serve(const std::vector<std::string>& argv) {
       make_web_service(*args, o.root.string(), std::move(*elevation), std::move(web_options));
   if (!web) return report_error(web.error().message);
   if (*web) {
-    o.generate = [web = *web](std::string_view target) -> std::optional<serve::GeneratedAnswer> {
-      auto a = web->answer(target);
-      if (!a) return std::nullopt;
-      return serve::GeneratedAnswer{std::move(a->content_type), std::move(a->content_encoding),
-                                    std::move(a->body)};
+    const auto as_generated = [](std::optional<web::WebAnswer> a) {
+      if (!a) return std::optional<serve::GeneratedAnswer>{};
+      return std::optional<serve::GeneratedAnswer>{serve::GeneratedAnswer{
+          std::move(a->content_type), std::move(a->content_encoding), std::move(a->body)}};
+    };
+    o.generate = [web = *web, as_generated](std::string_view target) {
+      return as_generated(web->answer(target));
+    };
+    o.generate_at_once = [web = *web, as_generated](std::string_view target) {
+      return as_generated(web->answer_if_made(target));
     };
   }
   // Block the stop signals before the server's threads start, so only the

@@ -13,8 +13,12 @@
 
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <fstream>
 #include <latch>
+#include <mutex>
+#include <optional>
+#include <string_view>
 #include <thread>
 #include <vector>
 
@@ -61,10 +65,10 @@ class HostileClientsTest : public ::testing::Test {
 
   // An in-process server on a free port with short-lived threads and
   // deadlines far away unless the clock is moved.
-  std::unique_ptr<serve::StoreServer> start(serve::ServeOptions o = {}) {
+  std::unique_ptr<serve::StoreServer> start(serve::ServeOptions o = {}, int loops = 2) {
     o.root = root_;
     o.port = 0;
-    o.threads = 2;
+    o.threads = loops;
     o.clock = [this] { return clock_.now(); };
     auto server = serve::StoreServer::start(o);
     EXPECT_TRUE(server) << server.error().message;
@@ -250,6 +254,110 @@ TEST_F(HostileClientsTest, AFifoAtATilePathIsRefusedAndSigtermStillStops) {
     FAIL() << "relief serve did not stop on SIGTERM";
   }
   EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+}
+
+// A generator that holds "/slow" until released and answers "/fast" at once,
+// like a web tile being made beside one already cached.
+struct HeldGenerator {
+  std::mutex mutex;
+  std::condition_variable released_cv;
+  bool released = false;
+  std::atomic<int> slow_started{0};
+
+  serve::Generator generator() {
+    return [this](std::string_view target) -> std::optional<serve::GeneratedAnswer> {
+      if (target == "/fast") return serve::GeneratedAnswer{"text/plain", "", "fast"};
+      if (target != "/slow") return std::nullopt;
+      ++slow_started;
+      std::unique_lock lock(mutex);
+      released_cv.wait(lock, [this] { return released; });
+      return serve::GeneratedAnswer{"text/plain", "", "slow"};
+    };
+  }
+  void release() {
+    {
+      std::lock_guard lock(mutex);
+      released = true;
+    }
+    released_cv.notify_all();
+  }
+  void wait_started() const {
+    for (int i = 0; i < 500 && slow_started == 0; ++i) std::this_thread::sleep_for(10ms);
+  }
+};
+
+// Answers made by the generator run on its own threads: while one is being
+// made, the one event loop goes on serving store files and other generated
+// answers, and the connection that asked gets it once made.
+TEST_F(HostileClientsTest, AnAnswerBeingGeneratedDoesNotHoldUpTheLoop) {
+  HeldGenerator held;
+  serve::ServeOptions o;
+  o.generate = held.generator();
+  o.generate_threads = 2;
+  auto server = start(o, 1);  // one loop: the one that took /slow must serve the rest
+  const int waiting = connect_client(server->port());
+  const std::string slow = get_request("/slow");
+  ASSERT_EQ(::send(waiting, slow.data(), slow.size(), MSG_NOSIGNAL),
+            static_cast<ssize_t>(slow.size()));
+  held.wait_started();
+  ASSERT_EQ(held.slow_started, 1);
+  for (int i = 0; i < 3; ++i) {  // answered while /slow is held
+    EXPECT_EQ(get(server->port(), "/manifest.json").status, 200);
+    const Response fast = get(server->port(), "/fast");
+    EXPECT_EQ(fast.status, 200);
+    EXPECT_EQ(fast.body, "fast");
+  }
+  held.release();
+  const Response r = read_response(waiting);
+  EXPECT_EQ(r.status, 200);
+  EXPECT_EQ(r.body, "slow");
+  ::close(waiting);
+}
+
+// Requests sent together on one connection are answered in their order, a
+// generated one first included; a client that hangs up while its answer is
+// made costs nothing, and the server stops with generation under way.
+TEST_F(HostileClientsTest, GeneratedAnswersKeepTheOrderOfAConnectionsRequests) {
+  HeldGenerator held;
+  serve::ServeOptions o;
+  o.generate = held.generator();
+  o.generate_threads = 1;
+  auto server = start(o);
+  const int fd = connect_client(server->port());
+  const std::string both =
+      get_request("/slow") + get_request("/manifest.json") + get_request("/fast");
+  ASSERT_EQ(::send(fd, both.data(), both.size(), MSG_NOSIGNAL), static_cast<ssize_t>(both.size()));
+  held.wait_started();
+  std::this_thread::sleep_for(50ms);  // the loop has the other two and must hold them back
+  held.release();
+  // The three answers, read as one stream (they may arrive in one segment).
+  std::string answers;
+  char buffer[4096];
+  while (answers.find("\r\n\r\nfast") == std::string::npos) {
+    const ssize_t n = ::recv(fd, buffer, sizeof buffer, 0);  // times out after 5 s
+    if (n <= 0) break;
+    answers.append(buffer, static_cast<size_t>(n));
+  }
+  const size_t slow_at = answers.find("\r\n\r\nslow"), manifest_at = answers.find("\r\n\r\n{}"),
+               fast_at = answers.find("\r\n\r\nfast");
+  ASSERT_NE(fast_at, std::string::npos) << answers;
+  EXPECT_LT(slow_at, manifest_at) << answers;
+  EXPECT_LT(manifest_at, fast_at) << answers;
+  ::close(fd);
+
+  HeldGenerator again;
+  o.generate = again.generator();
+  o.generate_threads = 2;  // one held by /slow, one for /fast
+  auto second_server = start(o);
+  const int gone = connect_client(second_server->port());
+  const std::string slow = get_request("/slow");
+  ::send(gone, slow.data(), slow.size(), MSG_NOSIGNAL);
+  again.wait_started();
+  ::close(gone);  // hangs up before its answer is made
+  EXPECT_EQ(get(second_server->port(), "/fast").body, "fast");
+  again.release();
+  EXPECT_EQ(get(second_server->port(), "/manifest.json").status, 200);
+  second_server->stop();
 }
 
 // The deadlines and the connection limit are the user's to set: a short read

@@ -131,6 +131,10 @@ TEST_F(ServeRoutes, ConcurrentRequestsForOneTileMakeItOnce) {
   auto tiler = TerrainTiler::create(std::make_shared<const tiles::Store>(std::move(*store)));
   ASSERT_TRUE(tiler.has_value());
   const WebService service(std::make_shared<const TerrainTiler>(std::move(*tiler)));
+  // Nothing made yet: the event loops' quick answer has nothing but the description.
+  EXPECT_FALSE(service.answer_if_made("/terrain/10/1032/753.terrain").has_value());
+  EXPECT_TRUE(service.answer_if_made("/terrain/layer.json").has_value());
+  EXPECT_EQ(service.tiles_made(), 0u);
   std::vector<std::thread> threads;
   std::vector<std::string> bodies(8);
   for (size_t i = 0; i < bodies.size(); ++i) {
@@ -145,6 +149,10 @@ TEST_F(ServeRoutes, ConcurrentRequestsForOneTileMakeItOnce) {
   EXPECT_FALSE(bodies[0].empty());
   EXPECT_TRUE(service.answer("/terrain/10/1032/753.terrain").has_value());
   EXPECT_EQ(service.tiles_made(), 1u) << "answered from the cache";
+  const auto quick = service.answer_if_made("/terrain/10/1032/753.terrain?v=1.0.0");
+  ASSERT_TRUE(quick.has_value());
+  EXPECT_EQ(quick->body, bodies[0]);
+  EXPECT_EQ(quick->content_encoding, "gzip");
   EXPECT_FALSE(service.answer("/elsewhere/10/1032/753.terrain").has_value());
 }
 

@@ -21,6 +21,7 @@
 #include <fmt/format.h>
 
 #include "answer.h"
+#include "generation_pool.h"
 #include "http_request.h"
 #include "relief/tiles/store_layout.h"
 
@@ -45,6 +46,10 @@ struct Connection {
   bool writing = false;      // an answer is in progress
   bool close_after = false;  // end the connection once the answer is sent
   bool peer_done = false;    // the client shut its side: answer what is buffered, then end
+  // A generated answer is being made on the pool (ServeOptions::generate):
+  // nothing is read or written until it comes back.
+  bool waiting = false;
+  uint64_t serial = 0;  // tells this connection from a later one on the same descriptor
   Clock::time_point deadline;
 };
 
@@ -84,7 +89,25 @@ class Loop {
   }
   size_t size() const { return size_.load(std::memory_order_relaxed); }
 
+  // An answer made on the pool for connection `fd` of `serial` (any thread).
+  void deliver(int fd, uint64_t serial, Answer answer) {
+    {
+      std::lock_guard lock(handed_mutex_);
+      made_.push_back({fd, serial, std::move(answer)});
+    }
+    wake();
+  }
+
  private:
+  struct Made {
+    int fd;
+    uint64_t serial;
+    Answer answer;
+  };
+  // Starts the answer to `request`, or hands it to the generation pool
+  // (false: the answer comes later, take_made()).
+  bool answer(Connection& c, const Request& request, Clock::time_point now);
+  void take_made(Clock::time_point now);
   void accept_some(Clock::time_point now);
   void on_event(Connection& c, uint32_t events, Clock::time_point now);
   void read_some(Connection& c, Clock::time_point now);
@@ -106,8 +129,10 @@ class Loop {
   int epoll_fd_ = -1, wake_fd_ = -1;
   std::unordered_map<int, Connection> connections_;
   std::atomic<size_t> size_{0};  // connections_.size(), for other loops to read
-  std::mutex handed_mutex_;
+  std::mutex handed_mutex_;      // guards handed_ and made_
   std::vector<int> handed_;
+  std::vector<Made> made_;
+  uint64_t next_serial_ = 0;
 };
 
 class Server final : public StoreServer {
@@ -122,6 +147,12 @@ class Server final : public StoreServer {
       const auto spare = static_cast<int>(std::min<rlim_t>(files.rlim_cur, 1 << 20) / 2) - 16;
       options_.max_connections = std::max(1, std::min(options_.max_connections, spare));
     }
+    if (options_.generate) {
+      const int threads = options_.generate_threads > 0
+                              ? options_.generate_threads
+                              : static_cast<int>(std::thread::hardware_concurrency());
+      pool_ = std::make_unique<GenerationPool>(threads);
+    }
     for (int i = 0; i < std::max(1, o.threads); ++i)
       loops_.push_back(std::make_unique<Loop>(*this));
     for (auto& loop : loops_) threads_.emplace_back([l = loop.get()] { l->run(); });
@@ -131,6 +162,7 @@ class Server final : public StoreServer {
 
   void stop() override {
     if (stopping_.exchange(true)) return;
+    if (pool_) pool_->stop();  // before the loops it delivers to go
     for (auto& loop : loops_) loop->wake();
     for (auto& t : threads_) t.join();
     loops_.clear();
@@ -151,6 +183,7 @@ class Server final : public StoreServer {
   int listener_, port_;
   std::atomic<bool> stopping_{false};
   std::atomic<int> open_connections_{0};
+  std::unique_ptr<GenerationPool> pool_;  // with a generator only
 
  private:
   std::vector<std::unique_ptr<Loop>> loops_;
@@ -189,6 +222,7 @@ void Loop::run() {
         uint64_t count = 0;
         [[maybe_unused]] const ssize_t r = ::read(wake_fd_, &count, sizeof count);
         take_handed(now);
+        take_made(now);
         continue;
       }
       if (fd == server_.listener_) {
@@ -233,6 +267,7 @@ void Loop::adopt(int fd, Clock::time_point now) {
   ::setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
   Connection& c = connections_[fd];
   c.fd = fd;
+  c.serial = ++next_serial_;
   c.deadline = now + server_.options_.read_timeout;
   watch(c, EPOLLIN, EPOLL_CTL_ADD);
   size_.store(connections_.size(), std::memory_order_relaxed);
@@ -241,7 +276,9 @@ void Loop::adopt(int fd, Clock::time_point now) {
 bool Loop::evict_idle() {
   Connection* oldest = nullptr;
   for (auto& [fd, c] : connections_) {
-    if (!c.writing && c.in.empty() && (!oldest || c.deadline < oldest->deadline)) oldest = &c;
+    if (!c.writing && !c.waiting && c.in.empty() && (!oldest || c.deadline < oldest->deadline)) {
+      oldest = &c;
+    }
   }
   if (!oldest) return false;
   close_connection(*oldest);
@@ -267,6 +304,10 @@ void Loop::take_handed(Clock::time_point now) {
 
 void Loop::on_event(Connection& c, uint32_t events, Clock::time_point now) {
   if (now >= c.deadline) return close_connection(c);
+  if (c.waiting) {  // watched for errors only until the answer comes
+    if (events & (EPOLLERR | EPOLLHUP)) close_connection(c);
+    return;
+  }
   if (c.writing) {
     if (events & (EPOLLOUT | EPOLLERR | EPOLLHUP)) {
       if (write_some(c, now) == Progress::done && serve_buffered(c, now)) {
@@ -301,7 +342,7 @@ void Loop::read_some(Connection& c, Clock::time_point now) {
 }
 
 bool Loop::serve_buffered(Connection& c, Clock::time_point now) {
-  while (!c.writing) {
+  while (!c.writing && !c.waiting) {
     const size_t end = c.in.find("\r\n\r\n");
     if (end == std::string::npos || end + 4 > kMaxRequestHeadBytes) {
       if (c.in.size() > kMaxRequestHeadBytes) {
@@ -315,16 +356,59 @@ bool Loop::serve_buffered(Connection& c, Clock::time_point now) {
     } else {
       const auto request = parse_request_head(std::string_view(c.in).substr(0, end + 4));
       c.in.erase(0, end + 4);
-      start_answer(
-          c,
-          request ? answer_request(server_.options_.root, *request, server_.options_.share_index,
-                                   server_.options_.share_count, server_.options_.generate)
-                  : status_answer(400, false),
-          now);
+      if (!request) {
+        start_answer(c, status_answer(400, false), now);
+      } else if (!answer(c, *request, now)) {
+        return true;  // made on the pool: its answer comes later
+      }
     }
     if (write_some(c, now) == Progress::closed) return false;
   }
   return true;
+}
+
+bool Loop::answer(Connection& c, const Request& request, Clock::time_point now) {
+  const ServeOptions& o = server_.options_;
+  if (!server_.pool_ || (request.method != "GET" && request.method != "HEAD") ||
+      store_file_for(request.target)) {
+    start_answer(c, answer_request(o.root, request, o.share_index, o.share_count, o.generate), now);
+    return true;
+  }
+  if (o.generate_at_once) {  // made already (a cached tile): no need for the pool
+    if (auto made = o.generate_at_once(request.target)) {
+      const Generator given = [&made](std::string_view) { return std::move(made); };
+      start_answer(c, answer_request(o.root, request, o.share_index, o.share_count, given), now);
+      return true;
+    }
+  }
+  c.waiting = true;
+  c.deadline = now + o.write_timeout;  // the answer must come (and then progress) in time
+  watch(c, 0);                         // errors and hang-ups only
+  server_.pool_->submit([this, &o, fd = c.fd, serial = c.serial, request] {
+    deliver(fd, serial, answer_request(o.root, request, o.share_index, o.share_count, o.generate));
+  });
+  return true;
+}
+
+void Loop::take_made(Clock::time_point now) {
+  std::vector<Made> made;
+  {
+    std::lock_guard lock(handed_mutex_);
+    made.swap(made_);
+  }
+  for (Made& m : made) {
+    const auto it = connections_.find(m.fd);
+    if (it == connections_.end() || it->second.serial != m.serial || !it->second.waiting) {
+      if (m.answer.file >= 0) ::close(m.answer.file);  // its connection ended meanwhile
+      continue;
+    }
+    Connection& c = it->second;
+    c.waiting = false;
+    start_answer(c, std::move(m.answer), now);
+    const Progress p = write_some(c, now);
+    if (p == Progress::closed || (p == Progress::done && !serve_buffered(c, now))) continue;
+    if (!c.waiting) watch(c, c.writing ? EPOLLOUT : EPOLLIN);
+  }
 }
 
 void Loop::start_answer(Connection& c, Answer answer, Clock::time_point now) {

@@ -5,6 +5,7 @@
 #include <functional>
 #include <mutex>
 #include <set>
+#include <utility>
 
 #include <fmt/format.h>
 
@@ -113,6 +114,23 @@ struct WebService::Impl {
         tiles(options.cache_bytes, [](const std::string& s) { return s.size() + 64; }),
         pages(options.pages) {}
 
+  // The route whose prefix `path` starts with, and the path after it.
+  std::optional<std::pair<int, std::string_view>> route_of(std::string_view path) const {
+    for (size_t i = 0; i < routes.size(); ++i) {
+      if (path.starts_with(routes[i].prefix)) {
+        return std::pair{static_cast<int>(i), path.substr(routes[i].prefix.size())};
+      }
+    }
+    return std::nullopt;
+  }
+
+  // The route's layer.json or tiles.json, when `rest` names it.
+  std::optional<WebAnswer> description(int index, std::string_view rest) const {
+    const Route& route = routes[static_cast<size_t>(index)];
+    if (rest != route.description_name) return std::nullopt;
+    return WebAnswer{"application/json", "", route.description};
+  }
+
   std::optional<WebAnswer> tile(int index, std::string_view rest) const {
     const Route& route = routes[static_cast<size_t>(index)];
     const auto path = parse_tile_path(rest, route.extension);
@@ -146,14 +164,24 @@ WebService::~WebService() = default;
 
 std::optional<WebAnswer> WebService::answer(std::string_view target) const {
   const std::string_view path = target_path(target);
-  for (size_t i = 0; i < impl_->routes.size(); ++i) {
-    const Route& route = impl_->routes[i];
-    if (!path.starts_with(route.prefix)) continue;
-    const std::string_view rest = path.substr(route.prefix.size());
-    if (rest == route.description_name) return WebAnswer{"application/json", "", route.description};
-    return impl_->tile(static_cast<int>(i), rest);
-  }
-  return impl_->pages.answer(path);
+  const auto found = impl_->route_of(path);
+  if (!found) return impl_->pages.answer(path);
+  const auto [index, rest] = *found;
+  if (auto d = impl_->description(index, rest)) return d;
+  return impl_->tile(index, rest);
+}
+
+std::optional<WebAnswer> WebService::answer_if_made(std::string_view target) const {
+  const auto found = impl_->route_of(target_path(target));
+  if (!found) return std::nullopt;
+  const auto [index, rest] = *found;
+  if (auto d = impl_->description(index, rest)) return d;
+  const Route& route = impl_->routes[static_cast<size_t>(index)];
+  const auto tile = parse_tile_path(rest, route.extension);
+  if (!tile) return std::nullopt;
+  const auto body = impl_->tiles.get({index, tile->z, tile->x, tile->y});
+  if (!body) return std::nullopt;
+  return WebAnswer{route.content_type, route.content_encoding, *body};
 }
 
 uint64_t WebService::tiles_made() const {

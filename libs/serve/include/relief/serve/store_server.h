@@ -27,9 +27,10 @@ struct GeneratedAnswer {
   std::string body;
 };
 // Called for every GET or HEAD whose path is not one of the store's files,
-// on the event loop threads, several at once: it must be thread-safe and
-// should be quick (a loop serves its other connections after it returns).
-// nullopt: 404.
+// on the server's generation threads (ServeOptions::generate_threads),
+// several at once: it must be thread-safe. The event loops go on serving
+// their other connections meanwhile; the connection that asked gets its
+// answer when it is made (in order with its other requests). nullopt: 404.
 using Generator = std::function<std::optional<GeneratedAnswer>(std::string_view target)>;
 
 struct ServeOptions {
@@ -53,6 +54,12 @@ struct ServeOptions {
   uint32_t share_index = 0, share_count = 1;
   // Answers for paths outside the store's files (empty: 404 for all).
   Generator generate;
+  // Threads that run `generate` (0: one per core).
+  int generate_threads = 0;
+  // Optional, quick and thread-safe: an answer `generate` has made already
+  // (a cached tile), given on the event loop without a trip to the pool;
+  // nullopt: ask `generate`.
+  Generator generate_at_once;
   // The clock deadlines are measured with (tests move it forward); empty:
   // std::chrono::steady_clock::now.
   std::function<std::chrono::steady_clock::time_point()> clock;

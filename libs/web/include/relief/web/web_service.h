@@ -44,6 +44,10 @@ class WebService {
   // The answer for a request target, nullopt when it names nothing here (or
   // a tile that is not available): the server's 404. Thread-safe.
   std::optional<WebAnswer> answer(std::string_view target) const;
+  // The same when it needs no making (a tile in the cache, a tileset's
+  // description), else nullopt: quick, for the server's event loops, which
+  // leave the rest to answer() on their generation threads. Thread-safe.
+  std::optional<WebAnswer> answer_if_made(std::string_view target) const;
 
   uint64_t tiles_made() const;  // tiles generated (not answered from the cache)
 
