@@ -20,7 +20,7 @@ constexpr const char* kExportHelp =
     R"(usage: relief export STORE --level L [--bbox W,S,E,N] [--memory SIZE] -o OUT.tif
        relief export STORE --format quantized-mesh [--max-level M] [--bbox W,S,E,N]
                      [--max-error METRES] [--threads N] -o DIR
-       relief export STORE --format terrain-rgb|terrarium|xyz [--tile-size 256|512]
+       relief export STORE --format terrain-rgb|terrarium|xyz|xyz-webp [--tile-size 256|512]
                      [--max-zoom Z] [--bbox W,S,E,N] [--threads N] -o DIR
 
 Reassembles tile interiors of one level into a GeoTIFF (EPSG:4326, the store's
@@ -41,7 +41,8 @@ or "terrarium"), --format xyz the colours of an imagery store:
 DIR/tiles.json and DIR/{z}/{x}/{y}.png, 256 pixels a side (or --tile-size
 512), zooms 0 to Z (default: the first zoom whose pixels all read the store's
 finest level; larger zooms are upsampled from it). Nodata is 0 m in a DEM,
-transparent in imagery.
+transparent in imagery. --format xyz-webp writes the imagery as lossy WebP
+(quality 85, lossless alpha; {z}/{x}/{y}.webp), a fraction of PNG's bytes.
 
 The web formats of an elevation store take its elevation as relief render
 draws it: --elevation STORE2 (repeatable) [--fuse first|mean] [--weights
@@ -101,7 +102,7 @@ int run_export(const std::vector<std::string>& argv) {
     if (args->has(web_only)) {
       return report_error(fmt::format(
           "export: {} applies to the web formats only (quantized-mesh, terrain-rgb, terrarium, "
-          "xyz)",
+          "xyz, xyz-webp)",
           web_only));
     }
   }

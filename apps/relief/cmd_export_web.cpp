@@ -24,7 +24,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr const char* kFormats = "geotiff, quantized-mesh, terrain-rgb, terrarium, xyz";
+constexpr const char* kFormats = "geotiff, quantized-mesh, terrain-rgb, terrarium, xyz, xyz-webp";
 constexpr uint64_t kCacheBytes = uint64_t{256} << 20;
 
 Result<std::optional<geo::GeoBox>> parse_web_bbox(const Args& args) {
@@ -141,21 +141,23 @@ TileSet terrain_tiles(const web::TerrainTiler& tiler, const std::string& name) {
   return set;
 }
 
+// `webp`: imagery as WebP (xyz-webp) rather than PNG.
 TileSet raster_tiles(const web::RasterTiler& tiler, const std::string& name,
-                     std::optional<web::DemEncoding> encoding) {
+                     std::optional<web::DemEncoding> encoding, bool webp) {
   TileSet set;
   for (int z = 0; z <= tiler.max_zoom(); ++z) {
     std::vector<geo::TileKey>& keys = set.zooms.emplace_back();
     for (const web::XyzKey& k : tiler.available_tiles(z)) keys.push_back({k.z, k.x, k.y});
     sort_z_order(keys);
   }
-  set.make = [&tiler, encoding](const geo::TileKey& k) {
+  set.make = [&tiler, encoding, webp](const geo::TileKey& k) {
     const web::XyzKey key{k.level, k.x, k.y};
-    return encoding ? tiler.dem_png_tile(key, *encoding) : tiler.imagery_png_tile(key);
+    if (encoding) return tiler.dem_png_tile(key, *encoding);
+    return webp ? tiler.imagery_webp_tile(key) : tiler.imagery_png_tile(key);
   };
-  set.extension = "png";
+  set.extension = webp ? "webp" : "png";
   set.index_name = "tiles.json";
-  set.index_text = tiler.tile_json(name, encoding);
+  set.index_text = tiler.tile_json(name, encoding, set.extension);
   return set;
 }
 
@@ -210,7 +212,7 @@ Result<Tilers> make_tilers(const Args& args, const std::string& format, tiles::S
     t.max_zoom = t.terrain->max_level();
     return t;
   }
-  const bool dem = format != "xyz";
+  const bool dem = format != "xyz" && format != "xyz-webp";
   if (dem != (kind == tiles::DatasetKind::Elevation)) {
     return fail(
         fmt::format("--format {}: {} holds {}; {} (use --format {})", format,
@@ -251,7 +253,7 @@ Result<tiles::Store> open_web_input(const Args& args, const std::string& input,
 int run_export_web(const Args& args, const std::string& format,
                    pipeline::ElevationProcessing elevation) {
   const auto encoding = web::dem_encoding_from_format(format);
-  if (format != "quantized-mesh" && format != "xyz" && !encoding) {
+  if (format != "quantized-mesh" && format != "xyz" && format != "xyz-webp" && !encoding) {
     return report_error(fmt::format("--format: '{}' is not one of {}", format, kFormats));
   }
   const std::string input = args.positional()[0];
@@ -278,8 +280,9 @@ int run_export_web(const Args& args, const std::string& format,
   const std::string name = fs::path(input).filename().empty()
                                ? fs::path(input).parent_path().filename().string()
                                : fs::path(input).filename().string();
-  const TileSet set = tilers->terrain ? terrain_tiles(*tilers->terrain, name)
-                                      : raster_tiles(*tilers->raster, name, encoding);
+  const TileSet set = tilers->terrain
+                          ? terrain_tiles(*tilers->terrain, name)
+                          : raster_tiles(*tilers->raster, name, encoding, format == "xyz-webp");
   uint64_t tiles = 0, bytes = 0;
   Status done = write_tiles(set, staged, threads->value_or(0), *progress, tiles, bytes);
   if (done) done = move_into_place(staged, out);

@@ -147,5 +147,48 @@ TEST_F(RasterImagery, ExportXyzAndRefuseHeightFormats) {
   EXPECT_FALSE(fs::exists(dir / "dem"));
 }
 
+// --format xyz-webp: the same tiles as lossy WebP, a fraction of the PNGs'
+// bytes; colours within a few levels of the PNG's, transparency the same.
+TEST_F(RasterImagery, ExportXyzWebpKeepsTheColoursAndTheTransparency) {
+  testing::ScratchDir dir("web_imagery_webp");
+  const fs::path out = dir / "webp";
+  auto r = testing::run_relief({"export", store_path().string(), "--format", "xyz-webp",
+                                "--max-zoom", "7", "-o", out.string(), "-q"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  auto text = read_text_file(out / "tiles.json", 1 << 20);
+  ASSERT_TRUE(text.has_value());
+  EXPECT_EQ(nlohmann::json::parse(*text)["tiles"][0], "{z}/{x}/{y}.webp");
+  auto opened = tiles::Store::open(store_path());
+  ASSERT_TRUE(opened.has_value());
+  auto tiler = RasterTiler::create(std::make_shared<const tiles::Store>(std::move(*opened)));
+  ASSERT_TRUE(tiler.has_value());
+  const int n = tiler->tile_size();
+  uint64_t webp_bytes = 0, png_bytes = 0, files = 0;
+  double difference = 0, opaque = 0;
+  for (int z = 0; z <= 7; ++z) {
+    for (const XyzKey& k : tiler->available_tiles(z)) {
+      auto webp = read_file(out / (k.to_string() + ".webp"), 1 << 24);
+      ASSERT_TRUE(webp.has_value()) << k.to_string();
+      auto png = tiler->imagery_png_tile(k);
+      ASSERT_TRUE(png.has_value());
+      webp_bytes += webp->size(), png_bytes += png->size(), ++files;
+      auto a = tiles::decode(tiles::Codec::Webp, *webp, tiles::SampleType::UInt8, 4, n, n);
+      auto b = tiles::decode(tiles::Codec::Png, *png, tiles::SampleType::UInt8, 4, n, n);
+      ASSERT_TRUE(a.has_value() && b.has_value()) << k.to_string();
+      const auto pa = a->u8(), pb = b->u8();
+      for (size_t p = 0; p < pa.size(); p += 4) {
+        ASSERT_EQ(pa[p + 3], pb[p + 3]) << k.to_string() << " pixel " << p / 4;  // lossless alpha
+        if (pb[p + 3] != 255) continue;
+        for (int c = 0; c < 3; ++c) difference += std::abs(int{pa[p + c]} - int{pb[p + c]});
+        opaque += 3;
+      }
+    }
+  }
+  EXPECT_EQ(files + 1, testing::regular_files_under(out));
+  ASSERT_GT(opaque, 0);
+  EXPECT_LT(difference / opaque, 4.0);  // mean colour difference, levels
+  EXPECT_LT(webp_bytes * 2, png_bytes);
+}
+
 }  // namespace
 }  // namespace relief::web

@@ -199,6 +199,16 @@ TEST_F(ServeRoutes, ImageryAndFusedElevationFromTheCommandLine) {
   const auto json = nlohmann::json::parse(description.body);
   const int z = json["maxzoom"];
   EXPECT_GT(z, 0);
+  EXPECT_EQ(get(port, "/imagery/0/0/0.png").headers.at("content-type"), "image/png");
+  const Response webp_description = get(port, "/imagery/webp/tiles.json");
+  EXPECT_EQ(webp_description.status, 200);
+  EXPECT_EQ(nlohmann::json::parse(webp_description.body)["tiles"][0], "{z}/{x}/{y}.webp");
+  const Response webp = get(port, "/imagery/webp/0/0/0.webp");
+  EXPECT_EQ(webp.status, 200);
+  EXPECT_EQ(webp.headers.at("content-type"), "image/webp");
+  EXPECT_EQ(webp.body.substr(0, 4), "RIFF");
+  EXPECT_EQ(webp.body.substr(8, 4), "WEBP");
+  EXPECT_EQ(get(port, "/imagery/webp/0/0/0.png").status, 404);
   EXPECT_EQ(get(port, "/terrain/layer.json").status, 200);
   EXPECT_EQ(get(port, "/terrain/10/1032/753.terrain").status, 200);
   ::kill(pid, SIGTERM);

@@ -140,8 +140,8 @@ std::vector<XyzKey> RasterTiler::available_tiles(int z) const {
   return keys;
 }
 
-std::string RasterTiler::tile_json(const std::string& name,
-                                   std::optional<DemEncoding> encoding) const {
+std::string RasterTiler::tile_json(const std::string& name, std::optional<DemEncoding> encoding,
+                                   std::string_view extension) const {
   const geo::GeoBox& b = impl_->bounds;
   nlohmann::json j = {
       {"tilejson", "2.2.0"},
@@ -151,7 +151,7 @@ std::string RasterTiler::tile_json(const std::string& name,
                 : std::string("relief imagery")},
       {"version", "1.0.0"},
       {"scheme", "xyz"},
-      {"tiles", {"{z}/{x}/{y}.png"}},
+      {"tiles", {fmt::format("{{z}}/{{x}}/{{y}}.{}", extension)}},
       {"minzoom", 0},
       {"maxzoom", impl_->max_zoom},
       {"bounds", {b.west, b.south, b.east, b.north}},
@@ -186,15 +186,25 @@ Result<tiles::Raster> RasterTiler::imagery_raster(const XyzKey& key) const {
 }
 
 namespace {
+Result<std::vector<std::byte>> encode_as(const tiles::Raster& r, tiles::Codec codec,
+                                         int quality = 90) {
+  tiles::CodecOptions o;
+  o.codec = codec;
+  o.quality = quality;
+  return tiles::encode(r, o);
+}
 Result<std::vector<std::byte>> encode_png(const tiles::Raster& r) {
-  tiles::CodecOptions png;
-  png.codec = tiles::Codec::Png;
-  return tiles::encode(r, png);
+  return encode_as(r, tiles::Codec::Png);
 }
 }  // namespace
 
 Result<std::vector<std::byte>> RasterTiler::imagery_png_tile(const XyzKey& key) const {
   return encode_png(RELIEF_TRY(imagery_raster(key)));
+}
+
+Result<std::vector<std::byte>> RasterTiler::imagery_webp_tile(const XyzKey& key,
+                                                              int quality) const {
+  return encode_as(RELIEF_TRY(imagery_raster(key)), tiles::Codec::Webp, quality);
 }
 
 Result<std::vector<std::byte>> encode_dem_png(const std::vector<double>& heights, int tile_size,

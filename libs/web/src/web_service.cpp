@@ -86,6 +86,15 @@ std::vector<Route> routes_of(const WebLayers& layers, const std::string& name) {
     }
   }
   if (const auto im = layers.imagery) {
+    // Before /imagery/, whose prefix it extends.
+    routes.push_back({"/imagery/webp/", ".webp", "tiles.json",
+                      im->tile_json(name, std::nullopt, "webp"), "image/webp", "",
+                      [im](int z, uint32_t x, uint32_t y) {
+                        return im->available({z, x, y});
+                      },
+                      [im](int z, uint32_t x, uint32_t y) {
+                        return im->imagery_webp_tile({z, x, y});
+                      }});
     routes.push_back({"/imagery/", ".png", "tiles.json", im->tile_json(name, std::nullopt),
                       "image/png", "",
                       [im](int z, uint32_t x, uint32_t y) {

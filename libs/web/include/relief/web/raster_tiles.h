@@ -13,6 +13,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "relief/base/result.h"
@@ -63,9 +64,10 @@ class RasterTiler {
   bool available(const XyzKey& key) const;
   // Every available tile of a zoom, sorted by (y, x).
   std::vector<XyzKey> available_tiles(int z) const;
-  // TileJSON 2.2.0 for tiles at "{z}/{x}/{y}.png" beside it; `encoding`
-  // for a DEM (MapLibre reads "encoding" and "tileSize" from it).
-  std::string tile_json(const std::string& name, std::optional<DemEncoding> encoding) const;
+  // TileJSON 2.2.0 for tiles at "{z}/{x}/{y}.EXTENSION" beside it;
+  // `encoding` for a DEM (MapLibre reads "encoding" and "tileSize" from it).
+  std::string tile_json(const std::string& name, std::optional<DemEncoding> encoding,
+                        std::string_view extension = "png") const;
 
   // Elevation stores. Heights (metres) of the pixel centres, row-major from
   // the north-west, NaN where there is no data.
@@ -76,6 +78,11 @@ class RasterTiler {
   // Imagery stores. RGBA pixels, transparent where there is no data.
   Result<tiles::Raster> imagery_raster(const XyzKey& key) const;
   Result<std::vector<std::byte>> imagery_png_tile(const XyzKey& key) const;
+  // Lossy colour at `quality` (1-100), lossless alpha: for orthoimagery a
+  // fraction of the PNG's bytes.
+  Result<std::vector<std::byte>> imagery_webp_tile(const XyzKey& key,
+                                                   int quality = kWebpQuality) const;
+  static constexpr int kWebpQuality = 85;
 
  private:
   struct Impl;

@@ -6,6 +6,7 @@
 //   /terrain/layer.json, /terrain/{z}/{x}/{y}.terrain   Cesium quantized-mesh
 //   /terrain-rgb/{z}/{x}/{y}.png, /terrarium/...        MapLibre raster-dem
 //   /imagery/{z}/{x}/{y}.png                            imagery, Web Mercator
+//   /imagery/webp/{z}/{x}/{y}.webp                      the same, lossy WebP
 //   (each with tiles.json or layer.json beside)
 //   /view/, /map/, /lib/cesium/..., /lib/maplibre/...  pages and libraries
 #include <cstdint>
