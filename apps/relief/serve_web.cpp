@@ -52,6 +52,14 @@ Result<web::WebLayers> layers_of(const Args& args, const std::string& root,
     layers.imagery =
         RELIEF_TRY(raster_tiler(std::make_shared<const tiles::Store>(std::move(store))));
   }
+  // Cesium's geographic tiling where the imagery's tiles allow it (512 x 256).
+  if (layers.imagery) {
+    const std::string path = args.get("--imagery").value_or(root);
+    if (auto g = web::GeographicTiles::create(
+            std::make_shared<const tiles::Store>(RELIEF_TRY(open_store(path))))) {
+      layers.imagery_geographic = std::make_shared<const web::GeographicTiles>(std::move(*g));
+    }
+  }
   return layers;
 }
 

@@ -11,6 +11,7 @@
 #include "relief/base/file_io.h"
 #include "relief/tiles/codec.h"
 #include "relief/tiles/store.h"
+#include "relief/web/geographic_tiles.h"
 #include "relief/web/raster_tiles.h"
 #include "test_support.h"
 
@@ -188,6 +189,56 @@ TEST_F(RasterImagery, ExportXyzWebpKeepsTheColoursAndTheTransparency) {
   ASSERT_GT(opaque, 0);
   EXPECT_LT(difference / opaque, 4.0);  // mean colour difference, levels
   EXPECT_LT(webp_bytes * 2, png_bytes);
+}
+
+// Cesium's geographic tiling: tile (z, x, y) is the west or east half of the
+// store tile (z, x / 2, y), sample for sample; tiles beyond the level's
+// range or without a store tile are not available; an elevation store is
+// refused by name.
+TEST_F(RasterImagery, GeographicTilesAreHalvesOfTheStoresTiles) {
+  auto opened = tiles::Store::open(store_path());
+  ASSERT_TRUE(opened.has_value());
+  const auto store = std::make_shared<const tiles::Store>(std::move(*opened));
+  auto geo_tiles = GeographicTiles::create(store);
+  ASSERT_TRUE(geo_tiles.has_value()) << geo_tiles.error().message;
+  const int b = store->grid().border(), n = GeographicTiles::kTileSize;
+  int checked = 0;
+  for (int z = 0; z <= geo_tiles->max_level(); ++z) {
+    for (const tiles::IndexEntry& entry : store->index(z).entries()) {
+      const geo::TileKey key = entry.key;
+      auto tile = store->read_tile(key);
+      ASSERT_TRUE(tile.has_value());
+      const int w = tile->raster.width();
+      for (uint32_t half = 0; half < 2; ++half) {
+        const geo::TileKey cesium{z, 2 * key.x + half, key.y};
+        ASSERT_TRUE(geo_tiles->available(cesium)) << cesium.to_string();
+        auto png = geo_tiles->png_tile(cesium);
+        ASSERT_TRUE(png.has_value());
+        auto r = tiles::decode(tiles::Codec::Png, *png, tiles::SampleType::UInt8, 4, n, n);
+        ASSERT_TRUE(r.has_value());
+        for (int j = 0; j < n; j += 17) {
+          for (int i = 0; i < n; i += 13) {
+            for (int c = 0; c < 4; ++c) {
+              const size_t from =
+                  (static_cast<size_t>(j + b) * w + b + half * n + static_cast<size_t>(i)) * 4 + c;
+              ASSERT_EQ(r->u8()[(static_cast<size_t>(j) * n + i) * 4 + c], tile->raster.u8()[from])
+                  << cesium.to_string() << " " << i << "," << j;
+            }
+          }
+        }
+        ++checked;
+      }
+    }
+  }
+  EXPECT_GT(checked, 4);
+  const int top = geo_tiles->max_level();
+  EXPECT_FALSE(geo_tiles->available({top + 1, 0, 0}));
+  EXPECT_FALSE(geo_tiles->available({0, 2, 0}));  // two columns at level 0
+  EXPECT_FALSE(geo_tiles->available({0, 0, 1}));  // one row
+  EXPECT_FALSE(geo_tiles->png_tile({0, 0, 1}).has_value());
+  const auto json = nlohmann::json::parse(geo_tiles->description("rgb"));
+  EXPECT_EQ(json["scheme"], "geographic");
+  EXPECT_EQ(json["maxzoom"], top);
 }
 
 }  // namespace

@@ -209,6 +209,11 @@ TEST_F(ServeRoutes, ImageryAndFusedElevationFromTheCommandLine) {
   EXPECT_EQ(webp.body.substr(0, 4), "RIFF");
   EXPECT_EQ(webp.body.substr(8, 4), "WEBP");
   EXPECT_EQ(get(port, "/imagery/webp/0/0/0.png").status, 404);
+  // Cesium's geographic tiling beside it (RGB.byte's tiles are 512 x 256).
+  const Response geographic = get(port, "/imagery-geo/tiles.json");
+  EXPECT_EQ(geographic.status, 200);
+  EXPECT_EQ(nlohmann::json::parse(geographic.body)["scheme"], "geographic");
+  EXPECT_EQ(get(port, "/imagery-geo/0/0/1.png").status, 404);  // level 0 has one row
   EXPECT_EQ(get(port, "/terrain/layer.json").status, 200);
   EXPECT_EQ(get(port, "/terrain/10/1032/753.terrain").status, 200);
   ::kill(pid, SIGTERM);

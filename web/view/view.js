@@ -173,26 +173,30 @@
   slider.addEventListener("input", () => setExaggeration(Number(slider.value)));
   setExaggeration(fragment.exaggeration);
 
-  // Imagery, when the server has an /imagery/ layer (Web Mercator XYZ tiles
-  // described by its tiles.json). Its absence is no error.
+  // Imagery, when the server has one: Cesium's own geographic tiling
+  // (/imagery-geo/: the store's samples as they are) where it is served,
+  // else the Web Mercator XYZ tiles of /imagery/. Its absence is no error.
   const imageryBox = document.getElementById("imagery");
   const imageryLabel = document.getElementById("imagery-label");
   let imagery = null;
-  fetch("/imagery/tiles.json").then(
-    async (r) => {
-      if (!r.ok) {
+  const describe = (route) => fetch(route + "tiles.json").then((r) => (r.ok ? r.json() : null));
+  Promise.all([describe("/imagery-geo/"), describe("/imagery/")]).then(
+    ([geographic, mercator]) => {
+      const description = geographic || mercator;
+      if (!description) {
         imageryLabel.textContent = "Imagery (none served)";
         return;
       }
-      const description = await r.json();
       const [west, south, east, north] = description.bounds;
       imageryBox.disabled = false;
       imageryBox.addEventListener("change", () => {
         if (imageryBox.checked) {
           imagery = viewer.imageryLayers.addImageryProvider(
             new Cesium.UrlTemplateImageryProvider({
-              url: "/imagery/{z}/{x}/{y}.png",
-              tilingScheme: new Cesium.WebMercatorTilingScheme(),
+              url: geographic ? "/imagery-geo/{z}/{x}/{y}.png" : "/imagery/{z}/{x}/{y}.png",
+              tilingScheme: geographic
+                ? new Cesium.GeographicTilingScheme()
+                : new Cesium.WebMercatorTilingScheme(),
               maximumLevel: description.maxzoom,
               rectangle: Cesium.Rectangle.fromDegrees(west, south, east, north),
             }),

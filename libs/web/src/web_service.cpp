@@ -104,6 +104,15 @@ std::vector<Route> routes_of(const WebLayers& layers, const std::string& name) {
                         return im->imagery_png_tile({z, x, y});
                       }});
   }
+  if (const auto g = layers.imagery_geographic) {
+    routes.push_back({"/imagery-geo/", ".png", "tiles.json", g->description(name), "image/png", "",
+                      [g](int z, uint32_t x, uint32_t y) {
+                        return g->available({z, x, y});
+                      },
+                      [g](int z, uint32_t x, uint32_t y) {
+                        return g->png_tile({z, x, y});
+                      }});
+  }
   return routes;
 }
 
@@ -168,7 +177,7 @@ struct WebService::Impl {
 WebService::WebService(WebLayers layers, WebServiceOptions options)
     : impl_(std::make_unique<Impl>(layers, std::move(options))) {}
 WebService::WebService(std::shared_ptr<const TerrainTiler> terrain, WebServiceOptions options)
-    : WebService(WebLayers{std::move(terrain), nullptr, nullptr}, std::move(options)) {}
+    : WebService(WebLayers{std::move(terrain), nullptr, nullptr, nullptr}, std::move(options)) {}
 WebService::~WebService() = default;
 
 std::optional<WebAnswer> WebService::answer(std::string_view target) const {

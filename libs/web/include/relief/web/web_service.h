@@ -7,6 +7,7 @@
 //   /terrain-rgb/{z}/{x}/{y}.png, /terrarium/...        MapLibre raster-dem
 //   /imagery/{z}/{x}/{y}.png                            imagery, Web Mercator
 //   /imagery/webp/{z}/{x}/{y}.webp                      the same, lossy WebP
+//   /imagery-geo/{z}/{x}/{y}.png                        imagery, Cesium's geographic tiling
 //   (each with tiles.json or layer.json beside)
 //   /view/, /map/, /lib/cesium/..., /lib/maplibre/...  pages and libraries
 #include <cstdint>
@@ -16,6 +17,7 @@
 #include <string_view>
 #include <vector>
 
+#include "relief/web/geographic_tiles.h"
 #include "relief/web/raster_tiles.h"
 #include "relief/web/static_files.h"
 #include "relief/web/terrain_tiler.h"
@@ -31,9 +33,10 @@ struct WebServiceOptions {
 
 // What is served; any may be null (its routes then answer 404).
 struct WebLayers {
-  std::shared_ptr<const TerrainTiler> terrain;  // /terrain/
-  std::shared_ptr<const RasterTiler> dem;       // /terrain-rgb/, /terrarium/
-  std::shared_ptr<const RasterTiler> imagery;   // /imagery/
+  std::shared_ptr<const TerrainTiler> terrain;                // /terrain/
+  std::shared_ptr<const RasterTiler> dem;                     // /terrain-rgb/, /terrarium/
+  std::shared_ptr<const RasterTiler> imagery;                 // /imagery/
+  std::shared_ptr<const GeographicTiles> imagery_geographic;  // /imagery-geo/
 };
 
 class WebService {
