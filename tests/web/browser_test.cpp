@@ -8,6 +8,8 @@
 #include <sys/wait.h>
 
 #include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
 
 #include "images.h"
 #include "relief/base/file_io.h"
@@ -56,9 +58,11 @@ void expect_vector(const nlohmann::json& got, const lod::Vec3& want, double tole
 // `relief serve STORE` with the repository's web root, for one test.
 struct ServedStore {
   int port = testing::free_port(), pid = 0;
-  explicit ServedStore(const fs::path& store) {
-    pid = testing::spawn_relief(
-        {"serve", store.string(), "--port", std::to_string(port), "--web-root", RELIEF_WEB_ROOT});
+  explicit ServedStore(const fs::path& store, std::vector<std::string> more = {}) {
+    std::vector<std::string> args = {"serve",      store.string(), "--port", std::to_string(port),
+                                     "--web-root", RELIEF_WEB_ROOT};
+    args.insert(args.end(), more.begin(), more.end());
+    pid = testing::spawn_relief(args);
     testing::wait_for(port);
   }
   ~ServedStore() { ::kill(pid, SIGTERM), ::waitpid(pid, nullptr, 0); }
@@ -177,6 +181,42 @@ TEST_F(BrowserView, CesiumShowsTheServedTerrainAsReliefRenderDoes) {
     fs::copy_file(dir / "cesium.png", keep / "cesium.png", fs::copy_options::overwrite_existing);
     ADD_FAILURE() << "terrain IoU " << iou << " < 0.95; frames kept in " << keep;
   }
+}
+
+// The page's imagery switch drapes `--imagery` in Cesium's geographic tiling:
+// Cesium asks /imagery-geo/ for tiles (never the Web Mercator ones), every
+// answer is 200, and the terrain's colours change where it is draped.
+TEST_F(BrowserView, TheViewDrapesTheServedImageryInCesiumsGeographicTiling) {
+  testing::ScratchDir dir("browser_imagery");
+  const fs::path imagery = dir / "world";
+  ASSERT_EQ(testing::run_relief({"build", testing::data("imagery/world.rgb.tif"), "--kind",
+                                 "imagery", "-o", imagery.string(), "-q"})
+                .exit_code,
+            0);
+  const ServedStore served(store(), {"--imagery", imagery.string()});
+  const nlohmann::json request = {
+      {"url", "http://127.0.0.1:" + std::to_string(served.port) + "/view/#camera=" + kCamera +
+                  "&fov=" + std::to_string(kFov)},
+      {"width", kWidth},
+      {"height", kHeight},
+      {"timeoutMs", 120000}};
+  ASSERT_TRUE(write_text_file_atomic(dir / "request.json", request.dump()).has_value());
+  int status = -1;
+  const std::string text =
+      testing::run_node({(fs::path(RELIEF_WEB_JS_DIR) / "browser_imagery.cjs").string(),
+                         (dir / "request.json").string()},
+                        status);
+  ASSERT_EQ(status, 0) << text;
+  const auto result = nlohmann::json::parse(text);
+  int geographic = 0;
+  for (const auto& r : result["responses"]) {
+    const std::string path = r["path"];
+    EXPECT_EQ(r["status"], 200) << path;
+    if (path.starts_with("/imagery-geo/") && path.ends_with(".png")) ++geographic;
+    EXPECT_FALSE(path.starts_with("/imagery/") && path.ends_with(".png")) << path;
+  }
+  EXPECT_GT(geographic, 0) << text;
+  EXPECT_GT(result["changed"].get<double>(), 0.2) << text;
 }
 
 }  // namespace
