@@ -19,6 +19,8 @@ constexpr const char* kServeHelp =
                     [--max-connections N] [--read-timeout S] [--write-timeout S]
                     [--web-root DIR] [--imagery STORE2] [--elevation STORE3
                     [--fuse first|mean] [--weights W,..]] [--elevation-op OP ...]
+                    [--texture STORE4 [--texture-op OP ...] [--texture-range MIN,MAX]
+                    [--texture-colormap grey|viridis]]
 
 Serves a store read-only over HTTP/1.1 until interrupted: only the store's own
 files (manifest.json, level indices, tiles) by their canonical paths, GET and
@@ -32,8 +34,12 @@ request and cached, as relief render draws it (--elevation layers fused,
 --elevation-op applied; the store's own files stay as they are):
   /terrain/layer.json, /terrain/{z}/{x}/{y}.terrain   Cesium quantized-mesh
   /terrain-rgb/{z}/{x}/{y}.png, /terrarium/...        MapLibre raster-dem
-and imagery (an imagery STORE, or --imagery STORE2):
+and imagery (an imagery STORE, --imagery STORE2, or one --texture layer: a
+single-band store such as SAR through its operators, range and colour map
+as relief render drapes it; relief render --help for the --texture family):
   /imagery/{z}/{x}/{y}.png                            Web Mercator XYZ
+  /imagery/webp/{z}/{x}/{y}.webp                      the same, lossy WebP
+  /imagery-geo/{z}/{x}/{y}.png                        Cesium's geographic tiling
 each with its tiles.json;
 and the pages that show it, with the libraries they load, from a web root:
   /view/#camera=LON,LAT,H,HEADING,PITCH,ROLL[&fov=DEG]   CesiumJS viewer
@@ -92,6 +98,8 @@ int run_serve(const std::vector<std::string>& argv) {
   std::vector<std::string> rest = argv;
   auto elevation = take_elevation_processing(rest);
   if (!elevation) return report_error(elevation.error().message);
+  auto textures = take_texture_layers(rest);
+  if (!textures) return report_error(textures.error().message);
   std::vector<OptionSpec> specs = {
       {"--port"},          {"--bind"},  {"--threads"},  {"--max-connections"}, {"--read-timeout"},
       {"--write-timeout"}, {"--share"}, {"--web-root"}, {"--generate-threads"}};
@@ -150,8 +158,8 @@ int run_serve(const std::vector<std::string>& argv) {
           mount.dir.c_str(), mount.prefix.c_str());
     }
   }
-  auto web =
-      make_web_service(*args, o.root.string(), std::move(*elevation), std::move(web_options));
+  auto web = make_web_service(*args, o.root.string(), std::move(*elevation), *textures,
+                              std::move(web_options));
   if (!web) return report_error(web.error().message);
   if (*web) {
     const auto as_generated = [](std::optional<web::WebAnswer> a) {

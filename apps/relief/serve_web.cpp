@@ -4,6 +4,7 @@
 
 #include <cstdio>
 
+#include "relief/pipeline/coloured_layer.h"
 #include "relief/tiles/store.h"
 #include "render_setup.h"
 
@@ -21,11 +22,27 @@ Result<std::shared_ptr<const web::RasterTiler>> raster_tiler(
   return std::make_shared<const web::RasterTiler>(std::move(tiler));
 }
 
-// The tiles of STORE (and --imagery) for web clients.
+// The imagery of a --texture layer: an RGBA store as it is, a single-band
+// one coloured as relief render drapes it.
+Result<tiles::Store> texture_imagery(const TextureLayers& textures) {
+  if (textures.layers.size() != 1) {
+    return fail(fmt::format("--texture: the web routes serve one layer; {} were given",
+                            textures.layers.size()));
+  }
+  const render::TextureLayer& layer = textures.layers.front();
+  if (!layer.lenses.empty()) return fail("--lens: lenses are not served to web clients yet");
+  if (layer.store->manifest().kind == tiles::DatasetKind::Imagery) return *layer.store;
+  return pipeline::colour_layer(*layer.store, textures.paths.front(),
+                                {layer.chain, layer.range_min, layer.range_max, layer.colormap});
+}
+
+// The tiles of STORE (and --imagery or --texture) for web clients.
 Result<web::WebLayers> layers_of(const Args& args, const std::string& root,
-                                 pipeline::ElevationProcessing elevation) {
+                                 pipeline::ElevationProcessing elevation,
+                                 const TextureLayers& textures) {
   web::WebLayers layers;
-  const tiles::Store plain = RELIEF_TRY(open_store(root));
+  std::shared_ptr<const tiles::Store> imagery_store;
+  tiles::Store plain = RELIEF_TRY(open_store(root));
   const auto kind = plain.manifest().kind;
   if (kind == tiles::DatasetKind::Elevation) {
     auto store = std::make_shared<const tiles::Store>(
@@ -39,24 +56,27 @@ Result<web::WebLayers> layers_of(const Args& args, const std::string& root,
                     "elevation STORE",
                     root, tiles::to_string(kind)));
   } else if (kind == tiles::DatasetKind::Imagery) {
-    layers.imagery =
-        RELIEF_TRY(raster_tiler(std::make_shared<const tiles::Store>(std::move(plain))));
+    imagery_store = std::make_shared<const tiles::Store>(std::move(plain));
   }
   if (auto imagery = args.get("--imagery")) {
-    if (layers.imagery) return fail("--imagery: STORE already holds the imagery served");
+    if (imagery_store) return fail("--imagery: STORE already holds the imagery served");
     tiles::Store store = RELIEF_TRY(open_store(*imagery));
     if (store.manifest().kind != tiles::DatasetKind::Imagery) {
       return fail(fmt::format("--imagery: {} holds {} data, not imagery", *imagery,
                               tiles::to_string(store.manifest().kind)));
     }
-    layers.imagery =
-        RELIEF_TRY(raster_tiler(std::make_shared<const tiles::Store>(std::move(store))));
+    imagery_store = std::make_shared<const tiles::Store>(std::move(store));
   }
-  // Cesium's geographic tiling where the imagery's tiles allow it (512 x 256).
-  if (layers.imagery) {
-    const std::string path = args.get("--imagery").value_or(root);
-    if (auto g = web::GeographicTiles::create(
-            std::make_shared<const tiles::Store>(RELIEF_TRY(open_store(path))))) {
+  if (!textures.layers.empty()) {
+    if (imagery_store) {
+      return fail("--texture: the imagery is served already (an imagery STORE or --imagery)");
+    }
+    imagery_store = std::make_shared<const tiles::Store>(RELIEF_TRY(texture_imagery(textures)));
+  }
+  if (imagery_store) {
+    layers.imagery = RELIEF_TRY(raster_tiler(imagery_store));
+    // Cesium's geographic tiling where the imagery's tiles allow it (512 x 256).
+    if (auto g = web::GeographicTiles::create(imagery_store)) {
       layers.imagery_geographic = std::make_shared<const web::GeographicTiles>(std::move(*g));
     }
   }
@@ -67,10 +87,11 @@ Result<web::WebLayers> layers_of(const Args& args, const std::string& root,
 
 Result<std::shared_ptr<web::WebService>> make_web_service(const Args& args, const std::string& root,
                                                           pipeline::ElevationProcessing elevation,
+                                                          const TextureLayers& textures,
                                                           web::WebServiceOptions options) {
   const bool layer_options = !args.get_all("--elevation").empty() || !elevation.empty() ||
-                             args.get("--imagery").has_value();
-  auto layers = layers_of(args, root, std::move(elevation));
+                             args.get("--imagery").has_value() || !textures.layers.empty();
+  auto layers = layers_of(args, root, std::move(elevation), textures);
   if (!layers) {
     // Asked for: an error. Otherwise the store's files are still served as
     // they are (a client may need them to learn what is wrong, e.g. a store

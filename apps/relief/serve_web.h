@@ -9,6 +9,7 @@
 #include "args.h"
 #include "relief/pipeline/processed_elevation.h"
 #include "relief/web/web_service.h"
+#include "texture_options.h"
 
 namespace relief::cli {
 
@@ -16,9 +17,12 @@ namespace relief::cli {
 std::vector<OptionSpec> serve_web_options();
 
 // The web service for STORE at `root`; null when there is nothing to serve
-// (no tiles of this kind of store, no pages).
+// (no tiles of this kind of store, no pages). `textures` (--texture, one
+// layer): the imagery routes' layer, a single-band store coloured through
+// its chain, range and colour map (pipeline::colour_layer).
 Result<std::shared_ptr<web::WebService>> make_web_service(const Args& args, const std::string& root,
                                                           pipeline::ElevationProcessing elevation,
+                                                          const TextureLayers& textures,
                                                           web::WebServiceOptions options);
 
 }  // namespace relief::cli

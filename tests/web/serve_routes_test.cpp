@@ -5,12 +5,14 @@
 #include <signal.h>
 #include <sys/wait.h>
 
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 #include <thread>
 
 #include "http_client.h"
 #include "qm_decoder.h"
 #include "relief/base/file_io.h"
+#include "relief/tiles/codec.h"
 #include "relief/tiles/store.h"
 #include "relief/web/web_service.h"
 #include "servers.h"
@@ -225,6 +227,56 @@ TEST_F(ServeRoutes, ImageryAndFusedElevationFromTheCommandLine) {
   EXPECT_TRUE(testing::is_one_line_error(
       testing::run_relief({"serve", imagery, "--port", "0", "--elevation", store().string()}),
       "--elevation"));
+}
+
+// SAR for web clients: one --texture layer through its operators and colour
+// map becomes the imagery routes' layer (pipeline::colour_layer); two layers
+// or a lens are one-line errors.
+TEST_F(ServeRoutes, ASarLayerIsServedAsColouredImagery) {
+  testing::ScratchDir dir("serve_sar");
+  const std::string sar = (dir / "umbra").string();
+  ASSERT_EQ(testing::run_relief({"build", testing::data("sar/umbra_mount_yasur.tif"), "--kind",
+                                 "sar", "-o", sar, "-q"})
+                .exit_code,
+            0);
+  const int port = testing::free_port();
+  const int pid = testing::spawn_relief({"serve", sar, "--port", std::to_string(port), "--texture",
+                                         sar, "--texture-op", "lee", "--texture-op", "log",
+                                         "--texture-colormap", "viridis"});
+  testing::wait_for(port);
+  const Response description = get(port, "/imagery-geo/tiles.json");
+  ASSERT_EQ(description.status, 200);
+  const int z = nlohmann::json::parse(description.body)["maxzoom"];
+  auto store = tiles::Store::open(sar);
+  ASSERT_TRUE(store.has_value());
+  // The tile with the most data, its west half in Cesium's geographic tiling.
+  geo::TileKey key;
+  uint32_t most = 0;
+  for (const tiles::IndexEntry& e : store->index(z).entries()) {
+    if (e.valid_count > most) most = e.valid_count, key = e.key;
+  }
+  const Response tile = get(port, fmt::format("/imagery-geo/{}/{}/{}.png", z, 2 * key.x, key.y));
+  ASSERT_EQ(tile.status, 200);
+  auto rgba =
+      tiles::decode(tiles::Codec::Png, bytes_of(tile.body), tiles::SampleType::UInt8, 4, 256, 256);
+  ASSERT_TRUE(rgba.has_value());
+  int coloured = 0;  // viridis: never grey
+  for (size_t p = 0; p < rgba->u8().size(); p += 4) {
+    const auto px = rgba->u8().subspan(p, 4);
+    coloured += px[3] == 255 && (px[0] != px[1] || px[1] != px[2]);
+  }
+  EXPECT_GT(coloured, 1000);
+  EXPECT_EQ(get(port, "/imagery/tiles.json").status, 200);
+  ::kill(pid, SIGTERM);
+  ::waitpid(pid, nullptr, 0);
+
+  EXPECT_TRUE(testing::is_one_line_error(
+      testing::run_relief({"serve", sar, "--port", "0", "--texture", sar, "--texture", sar}),
+      "--texture"));
+  EXPECT_TRUE(testing::is_one_line_error(
+      testing::run_relief({"serve", sar, "--port", "0", "--texture", sar, "--lens",
+                           "169.4,-19.5,500", "--lens-op", "lee"}),
+      "--lens"));
 }
 
 }  // namespace
