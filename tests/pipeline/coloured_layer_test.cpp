@@ -80,7 +80,9 @@ TEST(ColouredLayer, GreyLevelsOfTheValuesInTheRangeAndTransparentNodata) {
   }
   ASSERT_GT(most, 0u);
   bool differs = false;
-  const auto a = filtered->read_tile(key)->raster.u8(), b = coloured->read_tile(key)->raster.u8();
+  const auto filtered_tile = filtered->read_tile(key), plain_tile = coloured->read_tile(key);
+  ASSERT_TRUE(filtered_tile && plain_tile);
+  const auto a = filtered_tile->raster.u8(), b = plain_tile->raster.u8();
   for (size_t i = 0; i < a.size() && !differs; ++i) differs = a[i] != b[i];
   EXPECT_TRUE(differs);
 }
