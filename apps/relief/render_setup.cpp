@@ -175,11 +175,8 @@ Result<RenderSetup> parse_render_setup(const Args& args, TextureLayers textures,
   s.gpu_budget = RELIEF_TRY(byte_option(args, "--gpu-budget", s.gpu_budget));
   s.gpu_budget_given = args.has("--gpu-budget");
   s.memory_budget = RELIEF_TRY(byte_option(args, "--memory-budget", s.memory_budget));
-  if (s.memory_budget < view::kMinimumMemoryBudget) {
-    return fail(fmt::format("--memory-budget: {} is below the smallest budget, {}",
-                            *args.get("--memory-budget"),
-                            format_bytes(view::kMinimumMemoryBudget)));
-  }
+  // Refused now, before any GL context: the split itself comes with the scene.
+  RELIEF_CHECK(view::split_memory_budget(s.memory_budget, view::CacheUse{}));
 
   StoreAccess access;
   access.cache_bytes = RELIEF_TRY(byte_option(args, "--cache-size", access.cache_bytes));

@@ -439,6 +439,11 @@ LoaderStats TileLoader::stats() const {
   return s;
 }
 
+uint64_t TileLoader::resident_bytes() const {
+  std::lock_guard lock(impl_->mutex);
+  return impl_->resident_bytes;
+}
+
 TileState TileLoader::state(const TileKey& key) const {
   std::lock_guard lock(impl_->mutex);
   auto it = impl_->entries.find(key);

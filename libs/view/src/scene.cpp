@@ -115,9 +115,9 @@ struct Scene::Impl {
   // resident tiles, the diamond errors, and L3 where it is main memory.
   uint64_t cached_bytes(const render::FrameStats& draw) const {
     uint64_t bytes = refine_cache ? refine_cache->bytes() : 0;
-    if (loader) bytes += loader->stats().resident_bytes;
-    if (imagery_loader) bytes += imagery_loader->stats().resident_bytes;
-    for (const auto& l : layer_loaders) bytes += l->stats().resident_bytes;
+    if (loader) bytes += loader->resident_bytes();
+    if (imagery_loader) bytes += imagery_loader->resident_bytes();
+    for (const auto& l : layer_loaders) bytes += l->resident_bytes();
     if (gpu_in_memory) bytes += draw.gpu_allocated_bytes;
     return bytes;
   }

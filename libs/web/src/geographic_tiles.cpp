@@ -6,10 +6,12 @@
 #include <nlohmann/json.hpp>
 
 #include "relief/tiles/codec.h"
+#include "sample_block.h"
 
 namespace relief::web {
 
-Result<GeographicTiles> GeographicTiles::create(std::shared_ptr<const tiles::Store> store) {
+Result<GeographicTiles> GeographicTiles::create(std::shared_ptr<const tiles::Store> store,
+                                                uint64_t cache_bytes) {
   const tiles::Manifest& m = store->manifest();
   if (m.kind != tiles::DatasetKind::Imagery) {
     return fail(
@@ -19,7 +21,8 @@ Result<GeographicTiles> GeographicTiles::create(std::shared_ptr<const tiles::Sto
     return fail(fmt::format("{}: tiles of {} x {}; geographic web tiles need 512 x 256",
                             store->root().string(), store->grid().width(), store->grid().height()));
   }
-  return GeographicTiles(std::move(store));
+  auto pixels = std::make_shared<const Pixels>(store, cache_bytes);
+  return GeographicTiles(std::move(store), std::move(pixels));
 }
 
 int GeographicTiles::max_level() const {
@@ -36,17 +39,13 @@ bool GeographicTiles::available(const geo::TileKey& key) const {
 Result<tiles::Raster> GeographicTiles::raster(const geo::TileKey& key) const {
   if (!available(key))
     return fail(fmt::format("geographic tile {}: not available", key.to_string()));
-  const tiles::Tile tile = RELIEF_TRY(store_->read_tile({key.level, key.x / 2, key.y}));
-  const int b = store_->grid().border(), w = tile.raster.width();
+  // Cesium's tile is 256 of the level's global columns and rows, one half of
+  // a store tile's interior.
+  const std::vector<Rgba> samples = RELIEF_TRY(pixels_->read(
+      key.level, int64_t{key.x} * kTileSize, int64_t{key.y} * kTileSize, kTileSize, kTileSize));
   tiles::Raster out =
       tiles::Raster::uninitialised(tiles::SampleType::UInt8, 4, kTileSize, kTileSize);
-  const std::span<const uint8_t> in = tile.raster.u8();
-  const std::span<uint8_t> to = out.u8();
-  const size_t column = b + (key.x % 2) * kTileSize, row_bytes = size_t{4} * kTileSize;
-  for (int j = 0; j < kTileSize; ++j) {
-    const size_t from = (static_cast<size_t>(j + b) * static_cast<size_t>(w) + column) * 4;
-    std::memcpy(to.data() + static_cast<size_t>(j) * row_bytes, in.data() + from, row_bytes);
-  }
+  std::memcpy(out.u8().data(), samples.data(), samples.size() * sizeof(Rgba));
   return out;
 }
 

@@ -112,6 +112,8 @@ class TileLoader final : public lod::TileProvider {
   // Called on the render thread (in begin_frame) for every transition.
   void subscribe(std::function<void(const TileEvent&)> listener);
   LoaderStats stats() const;
+  // stats().resident_bytes without the walk over every entry (per frame).
+  uint64_t resident_bytes() const;
   TileState state(const geo::TileKey& key) const;
   // Nothing queued or loading, and every load that ended announced
   // (LoaderOptions::on_settled has returned).

@@ -5,7 +5,9 @@
 // each tile is half a store tile's interior, its samples as they are (no
 // resampling, no Web Mercator cut at ±85°). For imagery stores of 512 x 256
 // tiles (docs/web.md, "Geographic imagery").
+#include <array>
 #include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -16,10 +18,16 @@
 
 namespace relief::web {
 
+template <class Sample>
+class BlockReader;
+
 class GeographicTiles {
  public:
   // Fails for a store that is not imagery or whose tiles are not 512 x 256.
-  static Result<GeographicTiles> create(std::shared_ptr<const tiles::Store> store);
+  // Decoded store tiles are kept within `cache_bytes` (both halves of one,
+  // and a coloured layer's chain, are made once).
+  static Result<GeographicTiles> create(std::shared_ptr<const tiles::Store> store,
+                                        uint64_t cache_bytes = uint64_t{64} << 20);
 
   int max_level() const;
   // Cesium's tile (level, x, y): within the level and over a store tile.
@@ -34,8 +42,11 @@ class GeographicTiles {
   static constexpr int kTileSize = 256;
 
  private:
-  explicit GeographicTiles(std::shared_ptr<const tiles::Store> store) : store_(std::move(store)) {}
+  using Pixels = BlockReader<std::array<uint8_t, 4>>;
+  GeographicTiles(std::shared_ptr<const tiles::Store> store, std::shared_ptr<const Pixels> pixels)
+      : store_(std::move(store)), pixels_(std::move(pixels)) {}
   std::shared_ptr<const tiles::Store> store_;
+  std::shared_ptr<const Pixels> pixels_;  // the store's interiors, cached
 };
 
 }  // namespace relief::web
